@@ -1,0 +1,31 @@
+"""gearjax: a differentiable gear-contact engine in JAX.
+
+Pipeline: Scene -> geometry -> tca (rigid) -> ltca (elastic) -> impact -> results. Every
+stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-compiled,
+`vmap`-batched and differentiated. gearjax never changes global JAX flags; float64, the
+reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up.
+"""
+
+from . import units as units
+from .accuracy import Accuracy as Accuracy
+from .geometry import (
+    AbstractGearPair as AbstractGearPair,
+    InvoluteGearPair as InvoluteGearPair,
+)
+from .geometry.depth import FlankDepth as FlankDepth
+from .geometry.errors import MeshErrors as MeshErrors
+from .geometry.modification import (
+    FlankModification as FlankModification,
+    paper_optimum as paper_optimum,
+)
+from .scene import (
+    OperatingPoint as OperatingPoint,
+    Scene as Scene,
+    SimulationResult as SimulationResult,
+    simulate as simulate,
+    stack_scenes as stack_scenes,
+)
+from .tca import TCAResult as TCAResult, tooth_contact_analysis as tooth_contact_analysis
+from .units import Material as Material
+
+__version__ = "0.1.0"

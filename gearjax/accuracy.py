@@ -1,0 +1,92 @@
+"""Discretisation and solver settings, in one static object with named presets.
+
+`Accuracy` is hashable configuration (every field static): changing it recompiles, which
+is what makes the compiled program contain exactly the resolution asked for.
+`benchmarks/accuracy.py` reports, per knob and preset, the error against `reference` and
+the time it costs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+
+from ._validate import check_choice, check_int, check_range
+
+TCA_METHODS = ("surface", "plane_of_action")
+DTYPES = ("float64", "float32")
+
+
+class Accuracy(eqx.Module):
+    """How finely and how tightly the engine resolves the contact.
+
+    Attributes:
+        positions_per_pitch: pinion positions per angular pitch $2\\pi/z_1$.
+        face_slices: transverse slices across the face width (cell midpoints; the two face
+            ends are added as edge candidates).
+        newton_rtol, newton_atol: Newton tolerances (relative, absolute; parameters in mm,
+            angles in rad).
+        newton_max_steps: iteration cap; a solve that does not converge marks its candidate
+            invalid and is counted in `TCAResult.unconverged` (never silently replaced by its
+            start value). Contacts on the active flanks converge in at most 6 steps for the
+            seed pair even with reliefs of slope 0.3; the cap stops off-flank tangencies of
+            steep reliefs from holding up the whole batch.
+        tca_method: "surface" (general TCA on the real flanks, edge contact included) or
+            "plane_of_action" (involute families only: contact on the plane of action with
+            the separation equal to the sum of both flanks' depths).
+        contact_smoothing: smoothing of the load complementarity in LTCA, relative to the
+            mean load per point (0 is exact complementarity).
+        dtype: "float64" (reference; needs `jax.config.update("jax_enable_x64", True)`)
+            or "float32".
+    """
+
+    positions_per_pitch: int = eqx.field(static=True, default=32)
+    face_slices: int = eqx.field(static=True, default=21)
+    newton_rtol: float = eqx.field(static=True, default=1e-10)
+    newton_atol: float = eqx.field(static=True, default=1e-10)
+    newton_max_steps: int = eqx.field(static=True, default=12)
+    tca_method: str = eqx.field(static=True, default="surface")
+    contact_smoothing: float = eqx.field(static=True, default=1e-6)
+    dtype: str = eqx.field(static=True, default="float64")
+
+    def __check_init__(self):
+        check_int("positions_per_pitch", self.positions_per_pitch, 2, 100000)
+        check_int("face_slices", self.face_slices, 1, 10000)
+        check_range("newton_rtol", self.newton_rtol, 0.0, 1e-2, low_inclusive=False)
+        check_range("newton_atol", self.newton_atol, 0.0, 1e-2, low_inclusive=False)
+        check_int("newton_max_steps", self.newton_max_steps, 1, 10000)
+        check_choice("tca_method", self.tca_method, TCA_METHODS)
+        check_range("contact_smoothing", self.contact_smoothing, 0.0, 1.0)
+        check_choice("dtype", self.dtype, DTYPES)
+
+    @classmethod
+    def preset(cls, name: str) -> "Accuracy":
+        """Named presets: "fast", "default", "reference"."""
+        check_choice("accuracy preset", name, tuple(PRESETS))
+        return PRESETS[name]
+
+    def replace(self, **changes) -> "Accuracy":
+        """A copy with some fields changed (validated)."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise ValueError(f"unknown Accuracy field(s) {sorted(unknown)}; known: {sorted(fields)}")
+        fields.update(changes)
+        return Accuracy(**fields)
+
+
+PRESETS = {
+    "fast": Accuracy(
+        positions_per_pitch=16, face_slices=9, newton_rtol=1e-8, newton_atol=1e-8, newton_max_steps=8
+    ),
+    "default": Accuracy(),
+    "reference": Accuracy(
+        positions_per_pitch=128,
+        face_slices=81,
+        newton_rtol=1e-13,
+        newton_atol=1e-13,
+        newton_max_steps=48,
+        contact_smoothing=1e-9,
+    ),
+}

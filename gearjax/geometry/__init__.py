@@ -1,0 +1,4 @@
+"""Tooth families (one module each) and flank modifications."""
+
+from ._base import AbstractGearPair as AbstractGearPair
+from .involute import InvoluteGearPair as InvoluteGearPair

@@ -1,0 +1,50 @@
+"""Total material depth on a flank: modifications plus errors (mm, along the normal)."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .._custom_types import ArrayLike, Scalar
+from ._base import AbstractGearPair
+from .errors import MeshErrors
+from .modification import FlankModification
+
+
+class FlankDepth(eqx.Module):
+    """Sum of the flank modifications of both gears and the mesh errors.
+
+    `None` entries contribute nothing and are not traced, so a scene without modification
+    compiles no relief term.
+
+    Attributes:
+        pinion: modification of the pinion drive flank, or None.
+        gear: modification of the gear drive flank, or None.
+        errors: mesh errors (applied to the pinion flank), or None.
+    """
+
+    pinion: FlankModification | None = None
+    gear: FlankModification | None = None
+    errors: MeshErrors | None = None
+
+    def __call__(
+        self, pair: AbstractGearPair, gear: int, pair_index: ArrayLike, u: ArrayLike, z: ArrayLike
+    ) -> Scalar:
+        """Depth (mm) on the flank of `gear` of tooth pair `pair_index` at profile parameter
+        `u` (mm) and axial position `z` (mm)."""
+        depth = jnp.zeros(jnp.broadcast_shapes(jnp.shape(u), jnp.shape(z)), dtype=jnp.result_type(float))
+        modification = self.pinion if gear == 0 else self.gear
+        if modification is not None:
+            with jax.named_scope("term_modification"):
+                start, tip = pair.relief_coordinates(gear)
+                depth = depth + modification.depth(u, z, start, tip, pair.face_width)
+        if gear == 0 and self.errors is not None:
+            with jax.named_scope("term_errors"):
+                depth = depth + self.errors.depth(pair_index, z, pair.face_width)
+        return depth
+
+    @property
+    def is_zero(self) -> bool:
+        """True when nothing is applied (static)."""
+        return self.pinion is None and self.gear is None and self.errors is None

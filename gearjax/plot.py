@@ -1,0 +1,81 @@
+"""Matplotlib figures (optional extra: `pip install gearjax[plot]`).
+
+Every function draws on an `Axes` (a new figure when `ax` is None) and returns it. Lengths
+are shown in mm, transmission error in micrometres along the line of action, angles in
+degrees.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _axes(ax):
+    if ax is not None:
+        return ax
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as err:  # pragma: no cover - depends on the environment
+        raise ImportError("gearjax.plot needs matplotlib: pip install 'gearjax[plot]'") from err
+    _, ax = plt.subplots(figsize=(6.4, 4.0))
+    return ax
+
+
+def transmission_error(result, ax=None, label=None, **kwargs):
+    """Unloaded TE of a `TCAResult` (um along the line of action) against the pinion angle
+    (deg)."""
+    ax = _axes(ax)
+    angle = np.degrees(np.asarray(result.pinion_angle))
+    te = np.asarray(result.transmission_error) * float(np.asarray(result.action_radius)) * 1e3
+    ax.plot(angle, te, label=label, **kwargs)
+    ax.set_xlabel("pinion angle (deg)")
+    ax.set_ylabel("TE along line of action (um)")
+    ax.grid(True, alpha=0.3)
+    if label is not None:
+        ax.legend()
+    return ax
+
+
+def contact_path(result, ax=None, tolerance=1e-4, cmap="viridis"):
+    """Contact points on the pinion flank over the cycle: axial position (mm) against roll
+    length (mm), coloured by pinion angle; edge contacts are marked with crosses.
+
+    A point is drawn where its separation is below `tolerance` (mm): the contact lines of
+    line contact, or the binding point of localised contact.
+    """
+    ax = _axes(ax)
+    touching = np.asarray(result.in_contact(tolerance))
+    z = np.broadcast_to(np.asarray(result.slice_z), touching.shape)
+    s = np.asarray(result.pinion_parameter)
+    angle = np.broadcast_to(np.degrees(np.asarray(result.pinion_angle))[:, None, None], touching.shape)
+    edge = np.asarray(result.kind) != 0
+    flank = touching & ~edge
+    sc = ax.scatter(z[flank], s[flank], c=angle[flank], s=10, cmap=cmap)
+    if np.any(touching & edge):
+        ax.scatter(z[touching & edge], s[touching & edge], c="r", marker="x", s=20, label="edge contact")
+        ax.legend()
+    ax.figure.colorbar(sc, ax=ax, label="pinion angle (deg)")
+    ax.set_xlabel("axial position z (mm)")
+    ax.set_ylabel("pinion roll length s (mm)")
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def separation_map(result, position: int, ax=None):
+    """Initial separation (um) of every slice of every pair at one position."""
+    ax = _axes(ax)
+    sep = np.asarray(result.separation)[position] * 1e3
+    z = np.asarray(result.slice_z)
+    order = np.argsort(z)
+    for k, row in zip(np.asarray(result.pair_index), sep):
+        finite = np.isfinite(row[order])
+        if finite.any():
+            ax.plot(z[order][finite], row[order][finite], marker=".", label=f"pair {k}")
+    ax.set_xlabel("axial position z (mm)")
+    ax.set_ylabel("separation (um)")
+    ax.set_title(f"pinion angle {math.degrees(float(np.asarray(result.pinion_angle)[position])):.2f} deg")
+    ax.legend()
+    ax.grid(True, alpha=0.3)
+    return ax

@@ -1,0 +1,120 @@
+"""Presentation layer: results as a JSON-ready dictionary and a readable summary.
+
+Units switch here to what engineers read: micrometres, microradians, degrees, N·m, rpm.
+Every key carries its unit; the keys are documented in the README ("JSON output").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .scene import Scene, SimulationResult
+from .units import UM_PER_MM, URAD_PER_RAD
+
+
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+def _list(x, scale=1.0) -> list[float]:
+    return [float(v) * scale for v in np.asarray(x).ravel()]
+
+
+def geometry_dict(scene: Scene) -> dict:
+    pair = scene.pair
+    deg = 180.0 / math.pi
+    out = {
+        "family": type(pair).__name__,
+        "teeth": list(pair.teeth),
+        "center_distance_mm": _f(pair.center_distance),
+    }
+    if hasattr(pair, "working_pressure_angle"):
+        out.update(
+            {
+                "normal_module_mm": _f(pair.normal_module),
+                "helix_angle_deg": _f(pair.helix_angle) * deg,
+                "face_width_mm": _f(pair.face_width),
+                "transverse_pressure_angle_deg": _f(pair.transverse_pressure_angle) * deg,
+                "working_pressure_angle_deg": _f(pair.working_pressure_angle) * deg,
+                "base_helix_angle_deg": _f(pair.base_helix_angle) * deg,
+                "reference_radius_mm": _list(pair.reference_radius),
+                "base_radius_mm": _list(pair.base_radius),
+                "tip_radius_mm": _list(pair.tip_radius),
+                "root_radius_mm": _list(pair.root_radius),
+                "transverse_base_pitch_mm": _f(pair.transverse_base_pitch),
+                "normal_base_pitch_mm": _f(pair.normal_base_pitch),
+                "transverse_contact_ratio": _f(pair.transverse_contact_ratio),
+                "overlap_ratio": _f(pair.overlap_ratio),
+                "total_contact_ratio": _f(pair.total_contact_ratio),
+                "start_of_active_profile_roll_mm": _list(pair.start_of_active_profile),
+                "tip_roll_length_mm": _list(pair.tip_roll_length),
+            }
+        )
+    return out
+
+
+def tca_dict(scene: Scene, result: SimulationResult) -> dict:
+    tca = result.tca
+    te = np.asarray(tca.transmission_error)
+    rb = _f(tca.action_radius)
+    kind = np.asarray(tca.kind)
+    valid = np.asarray(tca.valid)
+    pair_idx, slice_idx = (np.asarray(a) for a in tca.binding)
+    binding_kind = kind[np.arange(te.size), pair_idx, slice_idx]
+    return {
+        "method": scene.accuracy.tca_method,
+        "positions": int(te.size),
+        "te_peak_to_peak_urad": _f(tca.te_peak_to_peak) * URAD_PER_RAD,
+        "te_peak_to_peak_um": _f(tca.te_peak_to_peak) * rb * UM_PER_MM,
+        "te_mean_um": float(np.mean(te)) * rb * UM_PER_MM,
+        "pinion_angle_deg": _list(tca.pinion_angle, 180.0 / math.pi),
+        "te_urad": _list(te, URAD_PER_RAD),
+        "te_um": _list(te, rb * UM_PER_MM),
+        "edge_contact_positions": int(np.sum(binding_kind != 0)),
+        "pairs": [int(k) for k in np.asarray(tca.pair_index)],
+        "contact_slices_per_position": [int(v) for v in np.asarray(tca.in_contact(1e-7)).sum((1, 2))],
+        "valid_slice_contacts": int(valid.sum()),
+        "unconverged_solves": int(np.asarray(tca.unconverged).sum()),
+    }
+
+
+def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None = None) -> dict:
+    """Everything `gearjax run --json` prints."""
+    out = {"geometry": geometry_dict(scene), "tca": tca_dict(scene, result)}
+    out["analysis"] = {
+        "effects": sorted({"tca"} | set(scene.effects)),
+        "positions_per_pitch": scene.accuracy.positions_per_pitch,
+        "face_slices": scene.accuracy.face_slices,
+        "dtype": scene.accuracy.dtype,
+    }
+    if notes:
+        out["notes"] = notes
+    return out
+
+
+def summary(out: dict) -> str:
+    """Readable multi-line summary of `result_dict` output."""
+    g, t = out["geometry"], out["tca"]
+    lines = [f"gearjax — {g['family']} pair z = {g['teeth'][0]}/{g['teeth'][1]}"]
+    if "normal_module_mm" in g:
+        lines += [
+            f"  m_n {g['normal_module_mm']:.4g} mm, beta {g['helix_angle_deg']:.4g} deg, b {g['face_width_mm']:.4g} mm",
+            f"  centre distance      a        = {g['center_distance_mm']:.3f} mm",
+            f"  working pressure ang alpha_wt = {g['working_pressure_angle_deg']:.3f} deg",
+            f"  base radii           r_b      = {g['base_radius_mm'][0]:.3f} / {g['base_radius_mm'][1]:.3f} mm",
+            f"  transverse base pitch p_bt    = {g['transverse_base_pitch_mm']:.3f} mm",
+            f"  contact ratios       eps_a    = {g['transverse_contact_ratio']:.3f}, eps_b = {g['overlap_ratio']:.3f}",
+        ]
+    lines += [
+        f"Unloaded TCA ({t['method']}, {t['positions']} positions, pairs {t['pairs']})",
+        f"  TE peak-to-peak      = {t['te_peak_to_peak_urad']:.3f} urad = {t['te_peak_to_peak_um']:.4f} um (line of action)",
+        f"  TE mean              = {t['te_mean_um']:.4f} um",
+        f"  edge contacts        = {t['edge_contact_positions']} of {t['positions']} positions",
+    ]
+    if t["unconverged_solves"]:
+        lines.append(f"  warning: {t['unconverged_solves']} contact solves did not converge (raise newton_max_steps)")
+    for note in out.get("notes", []):
+        lines.append(f"Note: {note}")
+    return "\n".join(lines)

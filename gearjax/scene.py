@@ -1,0 +1,240 @@
+"""Scenes and the pipeline that simulates them.
+
+A `Scene` is a pytree holding the gear pair, optional flank modifications and mesh errors,
+the operating point, the material, and static configuration: the effects to simulate and
+the `Accuracy`. `simulate(scene)` composes only the stages the scene calls for, decided at
+trace time (Python level), so the compiled program contains nothing else:
+
+* always: geometry and unloaded TCA;
+* a torque (`OperatingPoint.torque` not None): loaded TCA (LTCA) after TCA;
+* `"impact"` in the effects: the first-contact search and impact force.
+
+Each stage runs inside `jax.named_scope("stage_<name>")` and each flank term inside
+`"term_<name>"`, so the lowered program can be inspected (`program_text`, used by
+`tests/test_scene.py`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._custom_types import ArrayLike, Scalar
+from ._numerics import as_float
+from ._validate import check_range, is_concrete
+from .accuracy import Accuracy
+from .geometry._base import AbstractGearPair
+from .geometry.depth import FlankDepth
+from .geometry.errors import MeshErrors
+from .geometry.modification import FlankModification
+from .tca import TCAResult, pair_window, tooth_contact_analysis
+from .units import Material, newton_metre_to_newton_mm, rpm_to_rad_per_s
+
+#: Effects a scene may ask for beyond the always-present geometry and TCA.
+EFFECTS = ("ltca", "impact")
+
+
+class OperatingPoint(eqx.Module):
+    """Load and speed of the pinion (engine units).
+
+    Attributes:
+        torque: pinion torque (N·mm), or None for an unloaded (rigid) scene.
+        speed: pinion speed (rad/s).
+    """
+
+    torque: Scalar | None
+    speed: Scalar
+
+    def __init__(self, torque: ArrayLike | None = None, speed: ArrayLike = 0.0):
+        if torque is not None:
+            check_range("torque", torque, 0.0, 1e12, unit="N·mm")
+            torque = as_float(torque)
+        check_range("speed", speed, 0.0, 1e6, unit="rad/s")
+        self.torque = torque
+        self.speed = as_float(speed)
+
+    @classmethod
+    def from_nm_rpm(cls, torque_Nm: ArrayLike | None = None, speed_rpm: ArrayLike = 0.0) -> "OperatingPoint":
+        """From the usual units: torque in N·m, speed in rev/min."""
+        if torque_Nm is not None:
+            check_range("torque_Nm", torque_Nm, 0.0, 1e9, unit="N·m")
+            torque_Nm = newton_metre_to_newton_mm(torque_Nm)
+        check_range("speed_rpm", speed_rpm, 0.0, 1e7, unit="rpm")
+        return cls(torque_Nm, rpm_to_rad_per_s(speed_rpm))
+
+
+class Scene(eqx.Module):
+    """Everything one simulation needs.
+
+    Attributes:
+        pair: the gear pair (any tooth family).
+        modification: pinion flank modification, or None.
+        gear_modification: gear flank modification, or None.
+        errors: mesh errors, or None.
+        operating: torque and speed.
+        material: both gears' material.
+        effects: stages beyond TCA (static): subset of {"ltca", "impact"}; "ltca" is added
+            whenever a torque is given.
+        accuracy: discretisation and solver settings (static).
+        pairs: tooth-pair window of the TCA (static; derived from the geometry).
+        pitches: angular pitches covered by the positions (static).
+    """
+
+    pair: AbstractGearPair
+    modification: FlankModification | None
+    gear_modification: FlankModification | None
+    errors: MeshErrors | None
+    operating: OperatingPoint
+    material: Material
+    effects: frozenset = eqx.field(static=True)
+    accuracy: Accuracy = eqx.field(static=True)
+    pairs: tuple[int, ...] = eqx.field(static=True)
+    pitches: int = eqx.field(static=True)
+
+    def __init__(
+        self,
+        pair: AbstractGearPair,
+        modification: FlankModification | None = None,
+        *,
+        gear_modification: FlankModification | None = None,
+        errors: MeshErrors | None = None,
+        operating: OperatingPoint | None = None,
+        material: Material | None = None,
+        effects: tuple[str, ...] | frozenset = (),
+        accuracy: Accuracy | str = "default",
+        pairs: tuple[int, ...] | None = None,
+        pitches: int = 1,
+    ):
+        if not isinstance(pair, AbstractGearPair):
+            raise ValueError(f"pair must be a gear pair (e.g. InvoluteGearPair); got {type(pair).__name__}")
+        operating = OperatingPoint() if operating is None else operating
+        effects = frozenset(effects)
+        unknown = effects - set(EFFECTS)
+        if unknown:
+            raise ValueError(f"effects must be a subset of {EFFECTS}; got unknown {sorted(unknown)}")
+        if operating.torque is not None:
+            effects = effects | {"ltca"}
+        if "ltca" in effects and operating.torque is None:
+            raise ValueError("effects 'ltca' needs a torque: give operating=OperatingPoint(torque=...)")
+        if "impact" in effects and operating.torque is None:
+            raise ValueError("effects 'impact' needs a torque: give operating=OperatingPoint(torque=...)")
+        if isinstance(accuracy, str):
+            accuracy = Accuracy.preset(accuracy)
+        if not isinstance(pitches, int) or pitches < 1:
+            raise ValueError(f"pitches must be an integer >= 1; got {pitches!r}")
+        for name, mod in (("modification", modification), ("gear_modification", gear_modification)):
+            if mod is not None:
+                _check_modification_fits(pair, mod, 0 if name == "modification" else 1, name)
+        if pairs is None:
+            if not is_concrete(pair):
+                raise ValueError("pairs must be given when the scene is built inside a transformation")
+            pairs = pair_window(pair, pitches)
+        self.pair = pair
+        self.modification = modification
+        self.gear_modification = gear_modification
+        self.errors = errors
+        self.operating = operating
+        self.material = Material() if material is None else material
+        self.effects = effects
+        self.accuracy = accuracy
+        self.pairs = tuple(int(k) for k in pairs)
+        self.pitches = pitches
+
+    @property
+    def depth(self) -> FlankDepth:
+        """Modifications and errors as one flank-depth function."""
+        return FlankDepth(pinion=self.modification, gear=self.gear_modification, errors=self.errors)
+
+
+def stack_scenes(scenes: list[Scene]) -> Scene:
+    """Stack scenes of one structure into a batched scene (leading axis = design), ready
+    for `jax.vmap(simulate)`. Their tooth-pair windows are unified; accuracy, effects and
+    the presence of each optional part must agree."""
+    if not scenes:
+        raise ValueError("scenes must hold at least one Scene")
+    window = sorted(set().union(*(s.pairs for s in scenes)))
+    pairs = tuple(range(window[0], window[-1] + 1))
+    scenes = [dataclasses.replace(s, pairs=pairs) for s in scenes]
+    structures = {jax.tree_util.tree_structure(s) for s in scenes}
+    if len(structures) != 1:
+        raise ValueError(
+            "scenes must share one structure to be stacked: same family, accuracy, effects, "
+            "and the same optional parts (modification, errors, torque) present"
+        )
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *scenes)
+
+
+def _check_modification_fits(pair, modification, gear, name):
+    start, tip = pair.relief_coordinates(gear)
+    if is_concrete(start, tip, pair.face_width):
+        modification.check_fits(np.asarray(tip) - np.asarray(start), pair.face_width, name)
+
+
+class SimulationResult(eqx.Module):
+    """Results of `simulate`: one entry per stage, None where the scene did not ask for it."""
+
+    tca: TCAResult
+    ltca: object | None = None
+    impact: object | None = None
+
+
+def _x64_enabled() -> bool:
+    return bool(jax.config.jax_enable_x64)
+
+
+def _prepare(scene: Scene) -> Scene:
+    """Check the precision and cast every floating leaf to the accuracy's dtype."""
+    if scene.accuracy.dtype == "float64":
+        if not _x64_enabled():
+            raise ValueError(
+                "accuracy.dtype='float64' needs 64-bit JAX: call "
+                "jax.config.update('jax_enable_x64', True) at start-up, or use "
+                "accuracy.replace(dtype='float32')"
+            )
+        return scene
+
+    def cast(x):
+        if eqx.is_array(x) and jnp.issubdtype(x.dtype, jnp.floating):
+            return x.astype(jnp.float32)
+        return x
+
+    return jax.tree_util.tree_map(cast, scene)
+
+
+def simulate(scene: Scene) -> SimulationResult:
+    """Run the stages the scene calls for; jit-compiled once per scene structure.
+
+    A float32 scene (`Accuracy.dtype`) is traced with 64-bit types switched off, so every
+    constant of the program follows the requested precision.
+
+    Args:
+        scene: the `Scene`.
+
+    Returns:
+        `SimulationResult` with `tca` always and `ltca` / `impact` when requested.
+    """
+    scene = _prepare(scene)
+    if scene.accuracy.dtype == "float32":
+        with jax.enable_x64(False):
+            return _simulate(scene)
+    return _simulate(scene)
+
+
+@eqx.filter_jit
+def _simulate(scene: Scene) -> SimulationResult:
+    with jax.named_scope("stage_tca"):
+        tca = tooth_contact_analysis(
+            scene.pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches
+        )
+    return SimulationResult(tca=tca)
+
+
+def program_text(scene: Scene) -> str:
+    """The lowered (StableHLO) program of `simulate(scene)` with its debug locations, in
+    which the named scopes of the stages and flank terms appear."""
+    lowered = _simulate.lower(_prepare(scene)).lowered
+    return lowered.compiler_ir().operation.get_asm(enable_debug_info=True)

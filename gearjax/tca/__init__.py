@@ -1,0 +1,10 @@
+"""Unloaded tooth contact analysis (TCA) on the tooth-family interface."""
+
+from ._slice import KIND_NAMES as KIND_NAMES
+from .analysis import (
+    TCAResult as TCAResult,
+    face_slices as face_slices,
+    pair_window as pair_window,
+    positions as positions,
+    tooth_contact_analysis as tooth_contact_analysis,
+)

@@ -1,0 +1,197 @@
+r"""Contact of one tooth pair in one transverse slice: the Newton problems of the general TCA.
+
+In the transverse section at axial position $z$, the pinion flank is the planar curve
+$X_1(u_1)$ turned by $\Phi_1$ (its rotation plus lead rotation at $z$) and the gear flank is
+$X_2(u_2)$ turned by $\Phi_2 = \tfrac{z_1}{z_2}\Phi_1 + \Delta$. For a pinion position, the
+slice *touches* at the gear offset $\Delta$ at which the gear flank, coming back towards the
+pinion flank, first meets it. Three kinds of first contact are possible:
+
+* **flank** (surface-to-surface): $X_1(u_1) = X_2(u_2)$ and the tangents are parallel,
+  $\hat t_1 \times \hat t_2 = 0$ (3 equations in $u_1, u_2, \Delta$). In 3-D this is
+  Litvin's contact condition: coincident points and collinear normals, and it implies
+  the meshing equation $n\cdot v^{(12)} = 0$ for continuous tangency.
+* **gear-tip edge** on the pinion flank: $X_1(u_1) = X_2(u_{2,\text{tip}})$ (2 equations in
+  $u_1, \Delta$).
+* **pinion-tip edge** on the gear flank: $X_1(u_{1,\text{tip}}) = X_2(u_2)$.
+
+A candidate counts only if its Newton solve converged and its contact lies on the active
+flanks; the slice value is the largest valid $\Delta$ (the first feature to touch). The edge
+and flank candidates coincide when the flank contact reaches the tip, so the slice value is
+continuous, and (envelope theorem) so is its derivative with respect to the pinion angle.
+
+Every solve is `optimistix.root_find(..., Newton, ImplicitAdjoint)` with the residual at
+module level and data passed as `args`; failures are reported (`converged`), never thrown.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+
+from .._custom_types import Array, Float, Scalar
+from .._numerics import as_float, cross2, safe_divide, safe_norm
+from ..geometry._base import AbstractGearPair
+from ..geometry.depth import FlankDepth
+
+FLANK, GEAR_TIP_EDGE, PINION_TIP_EDGE = 0, 1, 2
+KIND_NAMES = ("flank", "gear_tip_edge", "pinion_tip_edge")
+
+
+class SliceProblem(eqx.Module):
+    """Data of one (tooth pair, slice, pinion position) contact problem."""
+
+    pair: AbstractGearPair
+    depth: FlankDepth
+    pair_index: Scalar  # k: pair k meshes k pitches after pair 0
+    z: Scalar  # axial position of the slice (mm)
+    pinion_rotation: Scalar  # Phi_1, lead rotation included (rad)
+
+    def pinion_point(self, u1):
+        return self.pair.slice_point(0, u1, self.z, self.pinion_rotation, self.depth(self.pair, 0, self.pair_index, u1, self.z))
+
+    def gear_point(self, u2, offset):
+        rotation = self.pinion_rotation / self.pair.gear_ratio + offset
+        return self.pair.slice_point(1, u2, self.z, rotation, self.depth(self.pair, 1, self.pair_index, u2, self.z))
+
+    def pinion_tangent(self, u1):
+        return jax.jvp(self.pinion_point, (u1,), (jnp.ones_like(u1),))
+
+    def gear_tangent(self, u2, offset):
+        return jax.jvp(lambda t: self.gear_point(t, offset), (u2,), (jnp.ones_like(u2),))
+
+
+def _contact_residual(y, args):
+    """One residual for all three candidate kinds (3 equations in $u_1, u_2, \\Delta$):
+    coincident points, and a third equation chosen by the one-hot `selector`: parallel
+    tangents (flank), $u_2 = u_{2,\\text{tip}}$ (gear-tip edge) or $u_1 = u_{1,\\text{tip}}$
+    (pinion-tip edge). One residual means one Newton solve to trace, vmapped over kinds."""
+    problem, selector, start, relevant = args
+    u1, u2, offset = y[0], y[1], y[2]
+    x1, t1 = problem.pinion_tangent(u1)
+    x2, t2 = problem.gear_tangent(u2, offset)
+    parallel = safe_divide(cross2(t1, t2), safe_norm(t1) * safe_norm(t2))
+    u1_tip = problem.pair.profile_limits(0)[1]
+    u2_tip = problem.pair.profile_limits(1)[1]
+    third = selector[0] * parallel + selector[1] * (u2 - u2_tip) + selector[2] * (u1 - u1_tip)
+    # A candidate screened out as irrelevant solves y = start in one step.
+    return jnp.where(relevant, jnp.concatenate([x1 - x2, third[None]]), y - start)
+
+
+class SliceContact(eqx.Module):
+    """The first contact of one slice (arrays broadcast over any batch axes).
+
+    Attributes:
+        offset: gear offset $\\Delta$ at which the slice touches (rad); the slice's
+            transmission error up to the lead correction.
+        pinion_parameter, gear_parameter: $u_1$, $u_2$ of the contact (mm).
+        kind: 0 flank, 1 gear-tip edge, 2 pinion-tip edge.
+        valid: some candidate converged on the active flanks.
+        unconverged: number of relevant candidates whose Newton solve failed (0 to 3).
+    """
+
+    offset: Float[Array, "..."]
+    pinion_parameter: Float[Array, "..."]
+    gear_parameter: Float[Array, "..."]
+    kind: Array
+    valid: Array
+    unconverged: Array
+
+
+def _within(u, limits, tol):
+    lo, hi = limits
+    return (u >= lo - tol) & (u <= hi + tol)
+
+
+def _starts(problem: SliceProblem):
+    """Starting points of the three candidates: the conjugate contact for the flank; for
+    an edge, the mate's flank point at the radius of the tip corner."""
+    pair = problem.pair
+    lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
+    g1, g2 = pair.contact_guess(problem.pinion_rotation)
+    zero = jnp.zeros_like(g1)
+    corner2 = problem.gear_point(lim2[1], zero)
+    edge2_u1 = pair.parameter_at_radius(0, safe_norm(corner2 - pair.center(0)))
+    corner1 = problem.pinion_point(lim1[1])
+    edge1_u2 = pair.parameter_at_radius(1, safe_norm(corner1 - pair.center(1)))
+    u1 = jnp.stack([g1, edge2_u1, jnp.broadcast_to(lim1[1], g1.shape)])
+    u2 = jnp.stack([g2, jnp.broadcast_to(lim2[1], g2.shape), edge1_u2])
+    dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
+    # Offset: the first-order (plane-of-action) value, the sum of both flanks' transverse
+    # depths at the conjugate point turned into a gear rotation.
+    depth1 = problem.depth(pair, 0, problem.pair_index, g1, problem.z) / pair.transverse_normal_fraction(0, g1, problem.z)
+    depth2 = problem.depth(pair, 1, problem.pair_index, g2, problem.z) / pair.transverse_normal_fraction(1, g2, problem.z)
+    offset = jnp.broadcast_to(-(depth1 + depth2) / pair.action_radius(1), u1.shape)
+    return jnp.stack([jnp.clip(u1, *dom1), jnp.clip(u2, *dom2), offset], axis=-1)
+
+
+def relevance(problem: SliceProblem):
+    """Which candidates can touch on the active flanks, judged from the conjugate contact
+    $(u_1, u_2)$ of the slice (3,): the flank contact near the active flanks, the gear-tip
+    edge before and around the start of engagement, the pinion-tip edge around and after
+    its end. Screening the others out keeps the batched Newton loop from iterating on
+    problems without a solution (under `vmap` every slice would pay for them)."""
+    pair = problem.pair
+    (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
+    g1, g2 = pair.contact_guess(problem.pinion_rotation)
+    m1, m2 = 0.25 * (hi1 - lo1), 0.25 * (hi2 - lo2)
+    flank = (g1 > lo1 - m1) & (g1 < hi1 + m1) & (g2 > lo2 - m2) & (g2 < hi2 + m2)
+    gear_edge = (g2 > hi2 - m2) & (g2 < hi2 + 2 * m2)
+    pinion_edge = (g1 > hi1 - m1) & (g1 < hi1 + 2 * m1)
+    return jnp.stack([flank, gear_edge, pinion_edge])
+
+
+def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
+    """Solve the three candidate problems of one slice: values (3, 3), converged (3,)
+    (False for candidates screened out by `relevance`) and failed (3,) (relevant but not
+    converged)."""
+    pair = problem.pair
+    dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
+    one = jnp.ones_like(dom1[0])
+    options = dict(
+        lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one])
+    )
+    selectors = jnp.eye(3, dtype=one.dtype)
+
+    def solve(y0, selector, relevant):
+        sol = optx.root_find(
+            _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
+            max_steps=max_steps, throw=False,
+        )
+        success = sol.result == optx.RESULTS.successful
+        return sol.value, success & relevant, relevant & ~success
+
+    return jax.vmap(solve)(_starts(problem), selectors, relevance(problem))
+
+
+def select_contact(problem: SliceProblem, values, converged, failed) -> SliceContact:
+    """Keep the first contact among the valid candidates (largest offset)."""
+    pair = problem.pair
+    lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
+    tol = 1e-9 * (1.0 + lim1[1])
+    ok = converged & _within(values[:, 0], lim1, tol) & _within(values[:, 1], lim2, tol)
+    # On ties (flank contact exactly at a tip) argmax keeps the first: the flank.
+    kind = jnp.argmax(jnp.where(ok, values[:, 2], -jnp.inf))
+    any_ok = jnp.any(ok)
+    return SliceContact(
+        offset=jnp.where(any_ok, values[kind, 2], -jnp.inf),
+        pinion_parameter=values[kind, 0],
+        gear_parameter=values[kind, 1],
+        kind=kind,
+        valid=any_ok,
+        unconverged=jnp.sum(failed),
+    )
+
+
+def solve_slice(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int) -> SliceContact:
+    """First contact of one slice (general TCA)."""
+    values, converged, failed = solve_candidates(problem, solver, max_steps)
+    return select_contact(problem, values, converged, failed)
+
+
+def make_problem(pair, depth, pair_index, z, pinion_angle) -> SliceProblem:
+    """Slice problem of pair `pair_index` at axial `z` for pinion angle `pinion_angle`."""
+    k = as_float(pair_index)
+    rotation = pinion_angle - k * pair.angular_pitch(0) + pair.lead_rotation(0, z)
+    return SliceProblem(pair=pair, depth=depth, pair_index=k, z=as_float(z), pinion_rotation=rotation)

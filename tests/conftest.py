@@ -1,0 +1,23 @@
+"""Test configuration: float64 and strict dtype promotion, as the engine's reference."""
+
+import jax
+import pytest
+
+jax.config.update("jax_enable_x64", True)
+jax.config.update("jax_numpy_dtype_promotion", "strict")
+
+
+@pytest.fixture(scope="session")
+def seed_pair():
+    """Seed 001's 29/71 helical pair (x1 = x2 = 0, a = 281.85 mm)."""
+    from gearjax import InvoluteGearPair
+
+    return InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)
+
+
+@pytest.fixture(scope="session")
+def spur_pair():
+    """A standard spur pair used where closed forms are simplest."""
+    from gearjax import InvoluteGearPair
+
+    return InvoluteGearPair((23, 41), 4.0, 20.0, 0.0, 20.0)

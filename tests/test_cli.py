@@ -1,0 +1,108 @@
+"""The `gearjax` command: default scene, JSON keys, scene files and their errors."""
+
+import json
+import math
+
+import pytest
+
+from gearjax.cli import main
+
+
+@pytest.fixture(scope="module")
+def default_json():
+    import contextlib
+    import io
+
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main(["run", "--json"]) == 0
+    return json.loads(buffer.getvalue())
+
+
+def test_default_scene_json_has_the_documented_keys(default_json, seed_pair):
+    g, t = default_json["geometry"], default_json["tca"]
+    assert g["base_radius_mm"] == pytest.approx([float(v) for v in seed_pair.base_radius], rel=1e-12)
+    assert len(g["base_radius_mm"]) == 2
+    assert g["center_distance_mm"] == pytest.approx(281.8454867, rel=1e-9)
+    assert g["working_pressure_angle_deg"] == pytest.approx(22.30998, abs=1e-5)
+    assert g["transverse_contact_ratio"] == pytest.approx(1.4523, abs=1e-4)
+    assert g["overlap_ratio"] == pytest.approx(1.2346, abs=1e-4)
+    rb2 = g["base_radius_mm"][1]
+    assert t["te_peak_to_peak_um"] == pytest.approx(t["te_peak_to_peak_urad"] * rb2 * 1e-3, rel=1e-12)
+    assert max(t["te_urad"]) - min(t["te_urad"]) == pytest.approx(t["te_peak_to_peak_urad"], rel=1e-12)
+    assert len(t["te_um"]) == t["positions"] == 32
+    assert any("261.0" in note for note in default_json["notes"])
+
+
+def test_summary_is_readable(capsys):
+    assert main(["run"]) == 0
+    out = capsys.readouterr().out
+    assert "centre distance" in out and "281.845" in out and "TE peak-to-peak" in out
+    assert "inconsistent" in out  # the paper's centre distance note
+
+
+def test_scene_file_with_modification_and_spur_pair(tmp_path, capsys):
+    path = tmp_path / "spur.toml"
+    path.write_text(
+        """
+[pair]
+teeth = [23, 41]
+normal_module = 4.0
+pressure_angle_deg = 20.0
+face_width = 20.0
+
+[modification]
+tip_relief_um = 10.0
+tip_relief_length = 10.0
+
+[analysis]
+accuracy = "fast"
+"""
+    )
+    assert main(["run", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["geometry"]["helix_angle_deg"] == 0.0
+    assert out["geometry"]["overlap_ratio"] == 0.0
+    # pinion tip relief on a spur pair: a TE dip no deeper than the plane-of-action theory
+    # C_a ((L_a - (eps_alpha - 1) p_bt) / L_a)^2; the coarse grid and the incoming pair's
+    # edge contact make it shallower
+    g = out["geometry"]
+    theory = 10.0 * ((10.0 - (g["transverse_contact_ratio"] - 1) * g["transverse_base_pitch_mm"]) / 10.0) ** 2
+    assert 0.3 * theory < out["tca"]["te_peak_to_peak_um"] <= theory
+
+
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncolour = 'red'\n", "pair.colour"),
+        ("[pair]\nteeth = [29]\nnormal_module = 5.0\n", "pair.teeth"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 'five'\n", "pair.normal_module"),
+        ("[pair]\nteeth = [29, 71]\n", "pair.normal_module"),
+        ("[operating]\ntorque_Nm = 100\n", "pair"),
+        ("[pair]\nteeth = [3, 71]\nnormal_module = 5.0\n", "teeth[0]"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[modification]\ntip_relief_um = -2\n", "tip_relief (y2)"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[operating]\ntorque_Nm = -3\n", "torque_Nm"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\naccuracy = 'best'\n", "accuracy preset"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncenter_distance = 261.0\n", "center_distance"),
+        ("[pair\nteeth = 1\n", "not valid TOML"),
+    ],
+)
+def test_bad_scene_files_give_one_line_and_status_2(tmp_path, capsys, text, field):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith("gearjax: error:")
+    assert field in err
+
+
+def test_missing_file_is_a_clean_error(capsys):
+    assert main(["run", "/nonexistent/scene.toml"]) == 2
+    assert "cannot read" in capsys.readouterr().err
+
+
+def test_working_pressure_angle_is_consistent(default_json):
+    g = default_json["geometry"]
+    a, rb = g["center_distance_mm"], g["base_radius_mm"]
+    assert math.degrees(math.acos((rb[0] + rb[1]) / a)) == pytest.approx(g["working_pressure_angle_deg"], rel=1e-12)
