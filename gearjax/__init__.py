@@ -2,9 +2,15 @@
 
 Pipeline: Scene -> geometry -> tca (rigid) -> ltca (elastic) -> impact -> results. Every
 stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-compiled,
-`vmap`-batched and differentiated. gearjax never changes global JAX flags; float64, the
-reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up.
+`vmap`-batched and differentiated. gearjax changes no JAX configuration; float64, the
+reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. On
+import it appends one XLA CPU flag to `XLA_FLAGS` (unless already set) that avoids a
+runtime deadlock of jaxlib's CPU backend, see `gearjax._runtime`.
 """
+
+from ._runtime import configure_xla_flags as _configure_xla_flags
+
+_configure_xla_flags()
 
 from . import units as units
 from .accuracy import Accuracy as Accuracy

@@ -35,8 +35,17 @@ class Accuracy(eqx.Module):
         tca_method: "surface" (general TCA on the real flanks, edge contact included) or
             "plane_of_action" (involute families only: contact on the plane of action with
             the separation equal to the sum of both flanks' depths).
-        contact_smoothing: smoothing of the load complementarity in LTCA, relative to the
-            mean load per point (0 is exact complementarity).
+        contact_smoothing: smoothing $\\varepsilon$ of the load complementarity in LTCA
+            (Fischer–Burmeister, dimensionless): the solution satisfies
+            $n g_i \\cdot y_i/1\\,\\mu m = \\varepsilon^2$, $g_i$ the torque fraction of point $i$.
+        contact_max_steps: Newton cap of each stage of the contact solve.
+        quadrature_points: Gauss–Legendre points of the tooth compliance integrals.
+        impact_max_steps: bisection cap of the first-contact search (each step halves the
+            bracket, one grid step wide at the start).
+        impact_fit_points: forces at which the local force-approach curve at the impact
+            point is computed for the fit $F = K_s\delta^n$.
+        impact_fit_range: (low, high) of those forces as fractions of the reference load
+            (the static normal load, at least 10 N per mm of face width).
         dtype: "float64" (reference; needs `jax.config.update("jax_enable_x64", True)`)
             or "float32".
     """
@@ -48,6 +57,11 @@ class Accuracy(eqx.Module):
     newton_max_steps: int = eqx.field(static=True, default=12)
     tca_method: str = eqx.field(static=True, default="surface")
     contact_smoothing: float = eqx.field(static=True, default=1e-6)
+    contact_max_steps: int = eqx.field(static=True, default=40)
+    quadrature_points: int = eqx.field(static=True, default=24)
+    impact_max_steps: int = eqx.field(static=True, default=64)
+    impact_fit_points: int = eqx.field(static=True, default=6)
+    impact_fit_range: tuple[float, float] = eqx.field(static=True, default=(0.02, 1.0))
     dtype: str = eqx.field(static=True, default="float64")
 
     def __check_init__(self):
@@ -57,7 +71,15 @@ class Accuracy(eqx.Module):
         check_range("newton_atol", self.newton_atol, 0.0, 1e-2, low_inclusive=False)
         check_int("newton_max_steps", self.newton_max_steps, 1, 10000)
         check_choice("tca_method", self.tca_method, TCA_METHODS)
-        check_range("contact_smoothing", self.contact_smoothing, 0.0, 1.0)
+        check_range("contact_smoothing", self.contact_smoothing, 0.0, 0.1, low_inclusive=False)
+        check_int("contact_max_steps", self.contact_max_steps, 1, 10000)
+        check_int("quadrature_points", self.quadrature_points, 2, 200)
+        check_int("impact_max_steps", self.impact_max_steps, 1, 10000)
+        check_int("impact_fit_points", self.impact_fit_points, 2, 1000)
+        fit = tuple(self.impact_fit_range)
+        if len(fit) != 2 or not (0.0 < fit[0] < fit[1]):
+            raise ValueError(f"impact_fit_range must be (low, high) with 0 < low < high; got {self.impact_fit_range!r}")
+        object.__setattr__(self, "impact_fit_range", (float(fit[0]), float(fit[1])))
         check_choice("dtype", self.dtype, DTYPES)
 
     @classmethod
@@ -87,6 +109,8 @@ PRESETS = {
         newton_rtol=1e-13,
         newton_atol=1e-13,
         newton_max_steps=48,
-        contact_smoothing=1e-9,
+        contact_smoothing=1e-8,
+        contact_max_steps=80,
+        quadrature_points=48,
     ),
 }

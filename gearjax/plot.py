@@ -79,3 +79,66 @@ def separation_map(result, position: int, ax=None):
     ax.legend()
     ax.grid(True, alpha=0.3)
     return ax
+
+
+def loaded_transmission_error(ltca, ax=None, label=None, **kwargs):
+    """Loaded TE of an `LTCAResult` (um along the line of action) against pinion angle."""
+    ax = _axes(ax)
+    angle = np.degrees(np.asarray(ltca.pinion_angle))
+    ax.plot(angle, np.asarray(ltca.transmission_error_line) * 1e3, label=label, **kwargs)
+    ax.set_xlabel("pinion angle (deg)")
+    ax.set_ylabel("loaded TE along line of action (um)")
+    ax.grid(True, alpha=0.3)
+    if label is not None:
+        ax.legend()
+    return ax
+
+
+def load_sharing(ltca, ax=None):
+    """Share of the load carried by each tooth pair over the cycle."""
+    ax = _axes(ax)
+    angle = np.degrees(np.asarray(ltca.pinion_angle))
+    share = np.asarray(ltca.load_share)
+    for k, column in zip(np.asarray(ltca.pair_index), share.T):
+        if column.max() > 1e-6:
+            ax.plot(angle, column, label=f"pair {k}")
+    ax.set_xlabel("pinion angle (deg)")
+    ax.set_ylabel("load share (-)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.legend()
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def contact_pattern(tca, ltca, ax=None, quantity="pressure", cmap="inferno"):
+    """Loaded contact pattern on the pinion flank over the cycle: every loaded point at its
+    axial position (mm) and roll length (mm), coloured by Hertz pressure (MPa) or load (N)."""
+    ax = _axes(ax)
+    n = np.asarray(ltca.loads).shape[-1]
+    value = np.asarray(ltca.pressure if quantity == "pressure" else ltca.loads)
+    loaded = np.asarray(ltca.loads) > 1e-6 * np.asarray(ltca.loads).max()
+    z = np.broadcast_to(np.asarray(ltca.slice_z), value.shape)
+    s = np.asarray(tca.pinion_parameter)[..., :n]
+    order = np.argsort(value[loaded])
+    sc = ax.scatter(z[loaded][order], s[loaded][order], c=value[loaded][order], s=12, cmap=cmap)
+    ax.figure.colorbar(sc, ax=ax, label="Hertz pressure (MPa)" if quantity == "pressure" else "load (N)")
+    ax.set_xlabel("axial position z (mm)")
+    ax.set_ylabel("pinion roll length s (mm)")
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def mesh_stiffness(ltca, ax=None, iso=None):
+    """Tangent and secant mesh stiffness per unit face width over the cycle (N/(mm·um)),
+    with ISO 6336's c_gamma_alpha as a line when `iso` (an `IsoStiffness`) is given."""
+    ax = _axes(ax)
+    angle = np.degrees(np.asarray(ltca.pinion_angle))
+    ax.plot(angle, np.asarray(ltca.mesh_stiffness_tangent), label="tangent dP/dd")
+    ax.plot(angle, np.asarray(ltca.mesh_stiffness_secant), "--", label="secant P/d")
+    if iso is not None:
+        ax.axhline(float(np.asarray(iso.mesh_stiffness)), color="k", lw=0.8, label="ISO 6336 c_gamma_alpha")
+    ax.set_xlabel("pinion angle (deg)")
+    ax.set_ylabel("mesh stiffness (N/(mm um))")
+    ax.legend()
+    ax.grid(True, alpha=0.3)
+    return ax

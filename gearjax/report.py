@@ -80,9 +80,39 @@ def tca_dict(scene: Scene, result: SimulationResult) -> dict:
     }
 
 
+def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
+    ltca = result.ltca
+    rb2 = _f(ltca.action_radius[1])
+    lte = np.asarray(ltca.transmission_error)
+    share = np.asarray(ltca.load_share)
+    return {
+        "compliance": type(scene.compliance).__name__,
+        "extended_contact": scene.extended_contact,
+        "torque_Nm": _f(ltca.torque) / 1000.0,
+        "normal_load_N": float(np.mean(np.asarray(ltca.normal_load))),
+        "lte_peak_to_peak_um": _f(ltca.lte_peak_to_peak) * UM_PER_MM,
+        "lte_peak_to_peak_urad": float(np.ptp(lte)) * URAD_PER_RAD,
+        "lte_mean_um": float(np.mean(lte)) * rb2 * UM_PER_MM,
+        "lte_um": _list(lte, rb2 * UM_PER_MM),
+        "mean_mesh_stiffness_N_per_mm_um": _f(ltca.mean_mesh_stiffness),
+        "mesh_stiffness_tangent_N_per_mm_um": _list(ltca.mesh_stiffness_tangent),
+        "mesh_stiffness_secant_N_per_mm_um": _list(ltca.mesh_stiffness_secant),
+        "max_load_share": _f(ltca.max_load_share),
+        "max_pressure_MPa": _f(ltca.max_pressure),
+        "load_share_per_pair": [_list(row) for row in share.T],
+        "converged": bool(np.all(np.asarray(ltca.converged))),
+    }
+
+
 def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None = None) -> dict:
     """Everything `gearjax run --json` prints."""
     out = {"geometry": geometry_dict(scene), "tca": tca_dict(scene, result)}
+    if result.ltca is not None:
+        out["ltca"] = ltca_dict(scene, result)
+    out["operating"] = {
+        "torque_Nm": None if scene.operating.torque is None else _f(scene.operating.torque) / 1000.0,
+        "speed_rpm": _f(scene.operating.speed) * 60.0 / (2 * math.pi),
+    }
     out["analysis"] = {
         "effects": sorted({"tca"} | set(scene.effects)),
         "positions_per_pitch": scene.accuracy.positions_per_pitch,
@@ -115,6 +145,16 @@ def summary(out: dict) -> str:
     ]
     if t["unconverged_solves"]:
         lines.append(f"  warning: {t['unconverged_solves']} contact solves did not converge (raise newton_max_steps)")
+    if "ltca" in out:
+        lt = out["ltca"]
+        lines += [
+            f"Loaded TCA ({lt['compliance']}, {lt['torque_Nm']:.6g} N·m, normal load {lt['normal_load_N']:.6g} N)",
+            f"  LTE peak-to-peak     = {lt['lte_peak_to_peak_um']:.4f} um, mean {lt['lte_mean_um']:.3f} um",
+            f"  mean mesh stiffness  = {lt['mean_mesh_stiffness_N_per_mm_um']:.3f} N/(mm um) per face width",
+            f"  max load share       = {lt['max_load_share']:.3f}, max Hertz pressure {lt['max_pressure_MPa']:.0f} MPa",
+        ]
+        if not lt["converged"]:
+            lines.append("  warning: the contact solve did not converge at every position")
     for note in out.get("notes", []):
         lines.append(f"Note: {note}")
     return "\n".join(lines)

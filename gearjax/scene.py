@@ -31,6 +31,7 @@ from .geometry._base import AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
+from .ltca import IsoCompliance, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .units import Material, newton_metre_to_newton_mm, rpm_to_rad_per_s
 
@@ -77,11 +78,21 @@ class Scene(eqx.Module):
         errors: mesh errors, or None.
         operating: torque and speed.
         material: both gears' material.
+        compliance: LTCA compliance model (`SliceCompliance()` by default, or
+            `IsoCompliance()`).
+        hub_radius: inner radius of each gear body (mm), shape (2,); it enters the fillet
+            foundation ($h_f = r_f/r_\\text{hub}$) and the gear inertias. Default half the
+            root radius.
+        inertia: $(J_1, J_2)$ of the whole rotating assemblies (t·mm²; 1 kg·m² = 1e3 t·mm²)
+            for the impact's equivalent mass, or None for the gear bodies as solid discs
+            $\pi\rho b(r_b^4 - r_h^4)/2$ (seed 001).
         effects: stages beyond TCA (static): subset of {"ltca", "impact"}; "ltca" is added
-            whenever a torque is given.
+            whenever a torque is given, and "impact" needs it.
         accuracy: discretisation and solver settings (static).
         pairs: tooth-pair window of the TCA (static; derived from the geometry).
         pitches: angular pitches covered by the positions (static).
+        extended_contact: loaded teeth may also touch by their tip edges beyond the active
+            profile (static; see `loaded_contact_analysis`).
     """
 
     pair: AbstractGearPair
@@ -90,10 +101,14 @@ class Scene(eqx.Module):
     errors: MeshErrors | None
     operating: OperatingPoint
     material: Material
+    compliance: IsoCompliance | SliceCompliance
+    hub_radius: jax.Array
+    inertia: jax.Array | None
     effects: frozenset = eqx.field(static=True)
     accuracy: Accuracy = eqx.field(static=True)
     pairs: tuple[int, ...] = eqx.field(static=True)
     pitches: int = eqx.field(static=True)
+    extended_contact: bool = eqx.field(static=True)
 
     def __init__(
         self,
@@ -104,10 +119,14 @@ class Scene(eqx.Module):
         errors: MeshErrors | None = None,
         operating: OperatingPoint | None = None,
         material: Material | None = None,
+        compliance: IsoCompliance | SliceCompliance | None = None,
+        hub_radius: ArrayLike | None = None,
+        inertia: ArrayLike | None = None,
         effects: tuple[str, ...] | frozenset = (),
         accuracy: Accuracy | str = "default",
         pairs: tuple[int, ...] | None = None,
         pitches: int = 1,
+        extended_contact: bool = True,
     ):
         if not isinstance(pair, AbstractGearPair):
             raise ValueError(f"pair must be a gear pair (e.g. InvoluteGearPair); got {type(pair).__name__}")
@@ -139,10 +158,35 @@ class Scene(eqx.Module):
         self.errors = errors
         self.operating = operating
         self.material = Material() if material is None else material
+        self.compliance = SliceCompliance() if compliance is None else compliance
+        if not isinstance(self.compliance, (IsoCompliance, SliceCompliance)):
+            raise ValueError(f"compliance must be IsoCompliance() or SliceCompliance(); got {type(compliance).__name__}")
+        if hub_radius is None:
+            hub_radius = 0.5 * pair.root_radius
+        else:
+            hub_radius = as_float(hub_radius)
+            if hub_radius.ndim == 0 or hub_radius.shape[-1] != 2:
+                hub_radius = jnp.stack([hub_radius, hub_radius], -1)
+            check_range("hub_radius", hub_radius, 0.0, None, low_inclusive=False, unit="mm")
+            if is_concrete(hub_radius, pair.root_radius):
+                root = np.asarray(pair.root_radius)
+                if np.any(np.asarray(hub_radius) >= root):
+                    raise ValueError(
+                        f"hub_radius must be in (0, r_f) = (0, {np.min(root[..., 0]):.3f}) / (0, "
+                        f"{np.min(root[..., 1]):.3f}) mm, inside the root circles; got {np.asarray(hub_radius)}"
+                    )
+        self.hub_radius = hub_radius
+        if inertia is not None:
+            inertia = as_float(inertia)
+            if inertia.shape[-1:] != (2,):
+                raise ValueError(f"inertia must be (J1, J2) in t·mm²; got shape {inertia.shape}")
+            check_range("inertia", inertia, 0.0, None, low_inclusive=False, unit="t·mm²")
+        self.inertia = inertia
         self.effects = effects
         self.accuracy = accuracy
         self.pairs = tuple(int(k) for k in pairs)
         self.pitches = pitches
+        self.extended_contact = bool(extended_contact)
 
     @property
     def depth(self) -> FlankDepth:
@@ -178,7 +222,7 @@ class SimulationResult(eqx.Module):
     """Results of `simulate`: one entry per stage, None where the scene did not ask for it."""
 
     tca: TCAResult
-    ltca: object | None = None
+    ltca: LTCAResult | None = None
     impact: object | None = None
 
 
@@ -230,7 +274,20 @@ def _simulate(scene: Scene) -> SimulationResult:
         tca = tooth_contact_analysis(
             scene.pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches
         )
-    return SimulationResult(tca=tca)
+    ltca = None
+    if "ltca" in scene.effects:
+        with jax.named_scope("stage_ltca"):
+            ltca = loaded_contact_analysis(
+                scene.pair,
+                tca,
+                scene.operating.torque,
+                compliance=scene.compliance,
+                material=scene.material,
+                hub_radius=scene.hub_radius,
+                accuracy=scene.accuracy,
+                extended_contact=scene.extended_contact,
+            )
+    return SimulationResult(tca=tca, ltca=ltca)
 
 
 def program_text(scene: Scene) -> str:

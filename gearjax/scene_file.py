@@ -15,6 +15,7 @@ from .accuracy import Accuracy
 from .geometry.errors import MeshErrors
 from .geometry.involute import InvoluteGearPair
 from .geometry.modification import FlankModification
+from .ltca import IsoCompliance, SliceCompliance
 from .scene import EFFECTS, OperatingPoint, Scene
 from .units import Material
 
@@ -59,7 +60,7 @@ speed_rpm = 5000.0
 accuracy = "default"
 """
 
-_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "analysis")
+_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "analysis")
 _PAIR_KEYS = {
     "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
     "face_width", "profile_shift", "center_distance", "addendum_coefficient",
@@ -80,6 +81,7 @@ _ERROR_KEYS = {
 }
 _OPERATING_KEYS = {"torque_Nm", "speed_rpm"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio", "density"}
+_LTCA_KEYS = {"compliance", "coupling_length_mn", "hertz", "hub_radius", "extended_contact"}
 _ANALYSIS_KEYS = {"accuracy", "effects", "tca_method", "positions_per_pitch", "face_slices", "dtype", "pitches"}
 
 
@@ -173,6 +175,31 @@ def scene_from_dict(data: dict) -> Scene:
         _unknown("material", table, _MATERIAL_KEYS)
         material = _build("material", Material, **{k: _number("material", k, v) for k, v in table.items()})
 
+    ltca = data.get("ltca", {})
+    _unknown("ltca", ltca, _LTCA_KEYS)
+    compliance_kind = ltca.get("compliance", "slice")
+    if compliance_kind not in ("slice", "iso"):
+        raise _fail("ltca.compliance", f"must be 'slice' or 'iso'; got {compliance_kind!r}")
+    if compliance_kind == "iso":
+        for key in ("coupling_length_mn", "hertz"):
+            if key in ltca:
+                raise _fail(f"ltca.{key}", "applies to compliance = 'slice' only")
+        compliance = IsoCompliance()
+    else:
+        options = {}
+        if "coupling_length_mn" in ltca:
+            options["coupling_length"] = _number("ltca", "coupling_length_mn", ltca["coupling_length_mn"])
+        if "hertz" in ltca:
+            options["hertz"] = ltca["hertz"]
+        compliance = _build("ltca", SliceCompliance, **options)
+    hub_radius = None
+    if "hub_radius" in ltca:
+        value = ltca["hub_radius"]
+        hub_radius = _numbers("ltca", "hub_radius", value, 2) if isinstance(value, list) else _number("ltca", "hub_radius", value)
+    extended = ltca.get("extended_contact", True)
+    if not isinstance(extended, bool):
+        raise _fail("ltca.extended_contact", f"must be true or false; got {extended!r}")
+
     analysis = data.get("analysis", {})
     _unknown("analysis", analysis, _ANALYSIS_KEYS)
     preset = analysis.get("accuracy", "default")
@@ -190,7 +217,6 @@ def scene_from_dict(data: dict) -> Scene:
     if isinstance(pitches, bool) or not isinstance(pitches, int) or pitches < 1:
         raise _fail("analysis.pitches", f"must be an integer >= 1; got {pitches!r}")
 
-    # Stages not implemented yet are not requested implicitly.
     return _build(
         "analysis",
         Scene,
@@ -198,19 +224,15 @@ def scene_from_dict(data: dict) -> Scene:
         modification=mods.get("modification"),
         gear_modification=mods.get("gear_modification"),
         errors=errors,
-        operating=_available(operating),
+        operating=operating,
         material=material,
+        compliance=compliance,
+        hub_radius=hub_radius,
         effects=tuple(effects),
         accuracy=accuracy,
         pitches=pitches,
+        extended_contact=extended,
     )
-
-
-def _available(operating):
-    """Until the loaded stages land, a scene runs unloaded; the torque is reported only."""
-    if operating is None:
-        return None
-    return OperatingPoint(None, operating.speed)
 
 
 def load_scene(path: str | Path) -> tuple[Scene, dict]:

@@ -3,6 +3,8 @@
 import jax
 import pytest
 
+import gearjax  # noqa: F401  (imported first: sets its XLA CPU flag before backends start)
+
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
 

@@ -34,6 +34,20 @@ def test_default_scene_json_has_the_documented_keys(default_json, seed_pair):
     assert any("261.0" in note for note in default_json["notes"])
 
 
+def test_default_scene_json_has_the_ltca_keys(default_json):
+    lt = default_json["ltca"]
+    assert lt["torque_Nm"] == pytest.approx(1000.0)
+    assert default_json["operating"]["torque_Nm"] == pytest.approx(1000.0)
+    # Normal load of the transverse tangential force T/r_b1 over cos(beta_b).
+    rb1 = default_json["geometry"]["base_radius_mm"][0]
+    beta_b = math.radians(default_json["geometry"]["base_helix_angle_deg"])
+    assert lt["normal_load_N"] == pytest.approx(1e6 / rb1 / math.cos(beta_b), rel=1e-9)
+    assert lt["lte_peak_to_peak_um"] == pytest.approx(max(lt["lte_um"]) - min(lt["lte_um"]), rel=1e-9)
+    assert 0.5 < lt["max_load_share"] <= 1.0
+    assert 5.0 < lt["mean_mesh_stiffness_N_per_mm_um"] < 40.0
+    assert lt["converged"] and lt["compliance"] == "SliceCompliance"
+
+
 def test_summary_is_readable(capsys):
     assert main(["run"]) == 0
     out = capsys.readouterr().out

@@ -12,6 +12,7 @@ from gearjax import (
     FlankModification,
     InvoluteGearPair,
     MeshErrors,
+    OperatingPoint,
     Scene,
     paper_optimum,
     simulate,
@@ -32,6 +33,13 @@ def test_unmodified_scene_compiles_no_modification_or_error_term(seed_pair):
 def test_rigid_scene_has_no_loaded_stages(seed_pair):
     text = program_text(Scene(seed_pair, accuracy=TINY))
     assert "stage_ltca" not in text and "stage_impact" not in text
+
+
+def test_loaded_scene_builds_the_ltca_stage(seed_pair):
+    scene = Scene(seed_pair, operating=OperatingPoint(torque=1.0e5), accuracy=TINY)
+    assert scene.effects == frozenset({"ltca"})
+    text = program_text(scene)
+    assert "stage_tca" in text and "stage_ltca" in text
 
 
 def test_simulate_does_not_retrace_for_new_values(seed_pair, monkeypatch):

@@ -1,0 +1,10 @@
+"""Loaded tooth contact analysis: compliance models, the contact solver, LTE and stiffness."""
+
+from .analysis import LTCAResult as LTCAResult, loaded_contact_analysis as loaded_contact_analysis
+from .compliance import (
+    IsoCompliance as IsoCompliance,
+    PointCompliance as PointCompliance,
+    SliceCompliance as SliceCompliance,
+)
+from .iso import IsoStiffness as IsoStiffness, iso_mesh_stiffness as iso_mesh_stiffness
+from .solver import ContactProblem as ContactProblem, ContactSolution as ContactSolution, solve_contact as solve_contact

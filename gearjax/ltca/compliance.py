@@ -1,0 +1,189 @@
+r"""Compliance models: the influence matrix of the contact points of one mesh position.
+
+The contact points are the (tooth pair $k$, face slice $j$) points of the TCA. A model
+returns, per position, the linear normal compliance matrix $f_{ij}$ (mm/N; block-diagonal
+over tooth pairs, since different pairs only interact through the rigid approach) and, for
+a nonlinear contact law, per-point coefficients $a_i$ of the extra approach $a_iF_i^{0.9}$.
+
+Transverse tooth compliances $c_t$ (per unit face width) become normal ones through the
+slice's transverse normal fraction $|n_t|$ ($\cos\beta_b$ on involute helicoids): a normal
+load $F_n$ has the transverse part $F_n|n_t|$ and a transverse deflection $\delta_t$ the
+normal part $\delta_t|n_t|$, so $c_n = |n_t|^2c_t$. The contact line crosses a slice of width
+$\Delta z$ over $\Delta z/|n_t|$.
+
+* `IsoCompliance`: a uniform stiffness $k_l$ per unit length of contact line, chosen so that
+  the mean mesh stiffness of an unmodified pair equals ISO 6336-1's $c_{\gamma\alpha}$:
+  with the mean contact-line length $\varepsilon_\alpha b/\cos\beta_b$ the transverse mesh
+  stiffness per unit face width is $k_l\varepsilon_\alpha\cos\beta_b$, so
+  $k_l = c_{\gamma\alpha}/(\varepsilon_\alpha\cos\beta_b)$. No coupling.
+* `SliceCompliance`: per slice, potential-energy bending, shear and axial compliance and
+  Sainsot's fillet foundation of both teeth at their own contact positions, plus contact.
+  Neighbouring slices of a tooth are coupled by a shear (Pasternak) layer: the tooth's
+  stiffness matrix is $K = \mathrm{diag}(k_j\Delta z) + k_cT$, $T = \mathrm{tridiag}(-1, 2, -1)$
+  with free ends, $k_c = \bar k\lambda^2/\Delta z$, and its compliance $K^{-1}$ (solved with
+  lineax's tridiagonal solver). A point load then spreads along the face with the decay
+  length $\lambda$ (influence $\propto e^{-|y|/\lambda}$) while a uniform load is carried as
+  without coupling, so the mean stiffness is unaffected and the face ends come out about
+  twice as compliant. This is the Winkler-plus-shear-layer model of Ajmi & Velex (2005,
+  Mech. Mach. Theory 40:173); their coupling value is not retrievable, so $\lambda$ is a
+  parameter, by default $1.1\,m_n$, the decay length of a Kantorovich–Vlasov plate
+  reduction of a loaded involute tooth (our derivation, a lower bound: it ignores shear
+  and body deflection).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import lineax as lx
+
+from .._custom_types import Array, Float
+from .._validate import check_choice, check_range
+from ..geometry.involute import InvoluteGearPair
+from ..tca import TCAResult
+from ..units import Material
+from .iso import iso_mesh_stiffness
+from .tooth_stiffness import (
+    PALMGREN,
+    foundation_compliance,
+    gauss_legendre,
+    hertz_linear_compliance,
+    root_half_angle,
+    tooth_compliance,
+)
+
+HERTZ_LAWS = ("palmgren", "linear")
+
+
+class PointCompliance(eqx.Module):
+    """Compliance of the contact points of every position.
+
+    Attributes:
+        matrix: linear normal compliance (pos, n, n), mm/N, n = pairs x slices.
+        nonlinear: coefficients $a_i$ (pos, n) of the extra approach $a_i F_i^{e}$, mm/N^e
+            (zero for a linear model).
+        exponent: the exponent $e$ (static; 0.9 for Palmgren's line contact).
+    """
+
+    matrix: Float[Array, "pos n n"]
+    nonlinear: Float[Array, "pos n"]
+    exponent: float = eqx.field(static=True, default=1.0)
+
+
+def _slice_lengths(tca: TCAResult, n_mid: int):
+    width = tca.slice_width[..., :n_mid]
+    frac = tca.transverse_normal_fraction[..., :n_mid]
+    return width, frac
+
+
+class IsoCompliance(eqx.Module):
+    """Uniform line stiffness from ISO 6336-1 method B (see the module docstring).
+
+    Call with `(pair, material, hub_radius, tca, n_mid, quadrature, weights)`; `weights`
+    scale each slice's contact-line length."""
+
+    def __call__(self, pair: InvoluteGearPair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
+        del hub_radius, quadrature
+        iso = iso_mesh_stiffness(pair)
+        width, frac = _slice_lengths(tca, n_mid)
+        # N/(mm um) -> N/mm^2; stiffness per unit length of contact line, normal direction
+        line_stiffness = 1000.0 * iso.mesh_stiffness / (pair.transverse_contact_ratio * jnp.cos(pair.base_helix_angle))
+        lengths = width / frac * weights
+        diagonal = 1.0 / (line_stiffness * lengths)  # (pos, pair, slice)
+        flat = diagonal.reshape(diagonal.shape[0], -1)
+        del material
+        return PointCompliance(jax.vmap(jnp.diag)(flat), jnp.zeros_like(flat), 1.0)
+
+
+def pasternak_compliance(compliance_per_width, slice_width, decay_length):
+    """Compliance matrix (mm/N) of one tooth's slices coupled by a shear layer.
+
+    $K = \\mathrm{diag}(k_j\\Delta z) + k_cT$, $k_j = 1/c_j$, $k_c = \\bar k\\lambda^2/\\Delta z$,
+    $T = \\mathrm{tridiag}(-1, 2, -1)$ with free ends ($T_{11} = T_{nn} = 1$); returns
+    $K^{-1}$ column by column with lineax's tridiagonal solver.
+
+    Args:
+        compliance_per_width: $c_j$ of each slice (mm²/N), shape (n,).
+        slice_width: $\\Delta z$ (mm).
+        decay_length: $\\lambda$ (mm); 0 uncouples the slices.
+    """
+    c = compliance_per_width
+    k = 1.0 / c
+    kc = jnp.mean(k) * decay_length**2 / slice_width
+    n = c.shape[-1]
+    ends = jnp.zeros(n, dtype=c.dtype).at[0].set(1.0).at[-1].set(1.0)
+    diag = k * slice_width + kc * (2.0 - ends)
+    off = -kc * jnp.ones(n - 1, dtype=c.dtype)
+    operator = lx.TridiagonalLinearOperator(diag, off, off)
+    basis = jnp.eye(n, dtype=c.dtype)
+    return jax.vmap(lambda e: lx.linear_solve(operator, e, lx.Tridiagonal()).value, out_axes=1)(basis)
+
+
+class SliceCompliance(eqx.Module):
+    """Potential-energy slices with a shear-layer coupling and Hertz contact.
+
+    Attributes:
+        coupling_length: decay length $\\lambda$ of a point load along the face, in units of
+            the normal module (default 1.1); 0 uncouples the slices.
+        hertz: "palmgren" (nonlinear line contact, steel) or "linear" (Yang & Sun).
+    """
+
+    coupling_length: float = eqx.field(static=True, default=1.1)
+    hertz: str = eqx.field(static=True, default="palmgren")
+
+    def __check_init__(self):
+        check_range("coupling_length", self.coupling_length, 0.0, 50.0, unit="m_n")
+        check_choice("hertz", self.hertz, HERTZ_LAWS)
+
+    def tooth_compliances(self, pair: InvoluteGearPair, material: Material, hub_radius, gear: int, roll_length, quadrature: int):
+        """Bending, shear, axial and foundation compliance (mm²/N) of `gear`'s tooth for a
+        load at roll length `roll_length` (mm), per unit face width."""
+        rb = pair.base_radius[..., gear]
+        rf = pair.root_radius[..., gear]
+        a2 = pair.half_base_thickness_angle(gear)
+        lo, hi = pair.profile_limits(gear)
+        s = jnp.clip(roll_length, lo, hi)
+        a1 = s / rb - a2
+        e, nu = material.youngs_modulus, material.poisson_ratio
+        kb, ks, ka = tooth_compliance(a1, a2, rb, rf, e, nu, gauss_legendre(quadrature))
+        theta = root_half_angle(
+            pair.teeth[gear],
+            pair.transverse_module,
+            pair.reference_radius[..., gear],
+            pair.transverse_pressure_angle,
+            pair.dedendum_coefficient[..., gear] * pair.normal_module,
+            pair.root_radius_coefficient[..., gear] * pair.normal_module,
+        )
+        kf = foundation_compliance(a1, rb, rf, hub_radius[..., gear], theta, e)
+        return kb, ks, ka, kf
+
+    def __call__(self, pair: InvoluteGearPair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
+        """Compliance of every point; `weights` (pos, pair, slice) scale each slice's
+        contact-line length (the tooth slice itself always spans the whole cell)."""
+        width, frac = _slice_lengths(tca, n_mid)  # (slice,), (pos, pair, slice)
+        s1 = tca.pinion_parameter[..., :n_mid]
+        s2 = tca.gear_parameter[..., :n_mid]
+        c1 = sum(self.tooth_compliances(pair, material, hub_radius, 0, s1, quadrature))
+        c2 = sum(self.tooth_compliances(pair, material, hub_radius, 1, s2, quadrature))
+        lam = self.coupling_length * pair.normal_module
+
+        dz = jnp.mean(width)
+
+        def block(c1k, c2k, fk):
+            transverse = pasternak_compliance(c1k, dz, lam) + pasternak_compliance(c2k, dz, lam)
+            return fk[:, None] * transverse * fk[None, :]
+
+        blocks = jax.vmap(jax.vmap(block))(c1, c2, frac)  # (pos, pair, slice, slice)
+        lengths = width / frac * weights
+        contact = hertz_linear_compliance(material.youngs_modulus, material.poisson_ratio) / lengths
+        if self.hertz == "linear":
+            blocks = blocks + jax.vmap(jax.vmap(jnp.diag))(contact)
+            nonlinear = jnp.zeros_like(lengths)
+            exponent = 1.0
+        else:
+            nonlinear = PALMGREN / lengths**0.8
+            exponent = 0.9
+        n_pos, n_pair, n_s = frac.shape
+        matrix = jax.vmap(lambda b: jax.scipy.linalg.block_diag(*b))(blocks) if n_pair > 1 else blocks[:, 0]
+        return PointCompliance(matrix.reshape(n_pos, n_pair * n_s, n_pair * n_s), nonlinear.reshape(n_pos, -1), exponent)

@@ -1,0 +1,184 @@
+"""Loaded TCA: equilibrium, complementarity, closed forms, ISO stiffness, linearity, grads."""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from gearjax import Accuracy, FlankDepth, FlankModification, InvoluteGearPair, Material, MeshErrors, paper_optimum
+from gearjax.ltca import IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis
+from gearjax.ltca.solver import DEFLECTION_SCALE
+from gearjax.tca import pair_window, tooth_contact_analysis
+
+ACC = Accuracy(positions_per_pitch=16, face_slices=21)
+SLICE = SliceCompliance()
+
+
+@eqx.filter_jit
+def analyse(pair, depth, torque, compliance, accuracy, pairs, extended=True):
+    tca = tooth_contact_analysis(pair, depth, accuracy=accuracy, pairs=pairs)
+    ltca = loaded_contact_analysis(pair, tca, torque, compliance=compliance, material=Material(),
+                                   hub_radius=0.5 * pair.root_radius, accuracy=accuracy, extended_contact=extended)
+    return tca, ltca
+
+
+def test_zero_torque_gives_the_unloaded_te_and_no_load(seed_pair):
+    tca, ltca = analyse(seed_pair, FlankDepth(pinion=paper_optimum()), 0.0, SLICE, ACC, pair_window(seed_pair))
+    assert np.all(np.asarray(ltca.converged))
+    assert np.all(np.asarray(ltca.loads) == 0.0)
+    np.testing.assert_allclose(np.asarray(ltca.transmission_error), np.asarray(tca.transmission_error), rtol=0, atol=1e-15)
+    # the initial tangent stiffness is finite; with Palmgren's law (approach ~ F^0.9) a line
+    # contact is infinitely compliant at zero load, so it is small
+    tangent = np.asarray(ltca.mesh_stiffness_tangent)
+    assert np.all(np.isfinite(tangent)) and np.all(tangent >= 0.0)
+    assert np.all(tangent < 0.1 * np.asarray(analyse(seed_pair, FlankDepth(pinion=paper_optimum()), 1.0e5, SLICE, ACC,
+                                                      pair_window(seed_pair))[1].mesh_stiffness_tangent))
+
+
+@pytest.fixture(scope="module")
+def loaded_seed(seed_pair):
+    return analyse(seed_pair, FlankDepth(pinion=paper_optimum()), 1.0e6, SLICE, ACC, pair_window(seed_pair))
+
+
+def test_equilibrium_and_complementarity(seed_pair, loaded_seed):
+    tca, ltca = loaded_seed
+    assert np.all(np.asarray(ltca.converged))
+    n = ACC.face_slices
+    x = np.asarray(tca.pinion_point)[..., :n, :]
+    nrm = np.asarray(tca.normal)[..., :n, :]
+    arm = x[..., 0] * nrm[..., 1] - x[..., 1] * nrm[..., 0]
+    loads = np.asarray(ltca.loads)
+    torque = np.sum(np.where(np.asarray(tca.valid)[..., :n], loads * arm, 0.0), axis=(1, 2))
+    np.testing.assert_allclose(torque, 1.0e6, rtol=1e-9)
+    gaps = np.asarray(ltca.gaps)
+    assert loads.min() > -1e-9 and gaps.min() > -1e-12  # N, mm: round-off of the solve
+    # smoothed Fischer-Burmeister: a_i b_i = eps^2 with a_i = n p_i F_i / T, b_i = y_i / y_bar,
+    # solved to the Newton tolerance on the residual: |a_i b_i| <= eps^2 + atol max(a)
+    count = loads.shape[1] * loads.shape[2]
+    a = count * arm * loads / 1.0e6
+    b = gaps / DEFLECTION_SCALE
+    valid = np.asarray(tca.valid)[..., :n]
+    assert np.max(np.abs(a * b)[valid]) <= ACC.contact_smoothing**2 + 2 * ACC.newton_atol * a[valid].max()
+    # the loaded gear lags: LTE below TE everywhere
+    assert np.all(np.asarray(ltca.transmission_error) < np.asarray(tca.transmission_error))
+
+
+def test_iso_model_lte_follows_the_contact_line_length(seed_pair):
+    """iso model, flank contacts only: LTE = -P / (k_l L(phi)) along the normal, with L the
+    total length of the straight contact lines s = s_k + z tan(beta_b) inside the zone of
+    action s_start <= s <= s_end, |z| <= b/2, and k_l = c_ga / (eps_alpha cos beta_b)."""
+    torque = 1.0e6
+    tca, ltca = analyse(seed_pair, FlankDepth(), torque, IsoCompliance(), ACC, pair_window(seed_pair), False)
+    rb1, rb2 = (float(v) for v in seed_pair.base_radius)
+    bb = float(seed_pair.base_helix_angle)
+    b = float(seed_pair.face_width)
+    alpha = float(seed_pair.working_pressure_angle)
+    s_start, s_end = float(seed_pair.start_of_active_profile[0]), float(seed_pair.tip_roll_length[0])
+    k_l = 1000 * float(iso_mesh_stiffness(seed_pair).mesh_stiffness) / (float(seed_pair.transverse_contact_ratio) * math.cos(bb))
+    load = torque / (rb1 * math.cos(bb))
+
+    def contact_length(phi):
+        total = 0.0
+        for k in range(-5, 6):
+            s_k = rb1 * (math.tan(alpha) + phi - 2 * math.pi * k / seed_pair.teeth[0])
+            lo = max(-b / 2, (s_start - s_k) / math.tan(bb))
+            hi = min(b / 2, (s_end - s_k) / math.tan(bb))
+            total += max(hi - lo, 0.0) / math.cos(bb)
+        return total
+
+    phis = np.asarray(ltca.pinion_angle)
+    lengths = np.array([contact_length(p) for p in phis])
+    closed = -load / (k_l * lengths) / math.cos(bb) / rb2
+    lte = np.asarray(ltca.transmission_error)
+    # peak-to-peak fluctuation: exactly the closed form
+    assert np.ptp(lte) == pytest.approx(np.ptp(closed), rel=1e-6)
+    assert np.ptp(closed) * rb2 * 1e3 > 1.0  # a fluctuation of more than 1 um
+    # every position: a contact-line end shorter than half a slice holds no slice centre and
+    # is lost, at most dz/(2 cos beta_b) per line end (two ends per line, three lines)
+    dz = b / ACC.face_slices
+    bound = 6 * dz / (2 * math.cos(bb)) / lengths.min()
+    np.testing.assert_allclose(lte, closed, rtol=bound)
+
+
+@pytest.mark.parametrize("name", ["seed", "spur"])
+def test_slice_model_mesh_stiffness_within_20_percent_of_iso(name, seed_pair, spur_pair):
+    pair = seed_pair if name == "seed" else spur_pair
+    torque = 100.0 * float(pair.base_radius[0]) * float(pair.face_width)  # 100 N/mm transverse
+    _, ltca = analyse(pair, FlankDepth(), torque, SLICE, ACC.replace(positions_per_pitch=32), pair_window(pair))
+    ours = float(ltca.mean_mesh_stiffness)
+    iso = float(iso_mesh_stiffness(pair).mesh_stiffness)
+    assert 0.8 * iso <= ours <= 1.2 * iso, (ours, iso)
+
+
+def test_linear_compliance_is_linear_in_the_load(seed_pair):
+    linear = SliceCompliance(hertz="linear")
+    pairs = pair_window(seed_pair)
+    _, one = analyse(seed_pair, FlankDepth(), 5.0e5, linear, ACC, pairs, False)
+    _, two = analyse(seed_pair, FlankDepth(), 1.0e6, linear, ACC, pairs, False)
+    np.testing.assert_allclose(np.asarray(two.rotation), 2 * np.asarray(one.rotation), rtol=1e-8)
+    np.testing.assert_allclose(np.asarray(two.loads), 2 * np.asarray(one.loads), rtol=1e-6, atol=1e-6)
+    # the nonlinear (Palmgren) contact is not
+    _, p1 = analyse(seed_pair, FlankDepth(), 5.0e5, SLICE, ACC, pairs, False)
+    _, p2 = analyse(seed_pair, FlankDepth(), 1.0e6, SLICE, ACC, pairs, False)
+    assert np.all(np.asarray(p2.rotation) < 1.99 * np.asarray(p1.rotation))
+
+
+def test_crowning_relieves_the_face_end_under_misalignment(seed_pair):
+    errors = MeshErrors(misalignment=0.015)
+    pairs = pair_window(seed_pair)
+    _, plain = analyse(seed_pair, FlankDepth(errors=errors), 1.0e6, SLICE, ACC, pairs)
+    crowned_mod = FlankModification(crowning=0.015)
+    _, crowned = analyse(seed_pair, FlankDepth(pinion=crowned_mod, errors=errors), 1.0e6, SLICE, ACC, pairs)
+    # misalignment of +15 um opens the +b/2 end: the load piles up at the -b/2 end
+    end_plain = np.asarray(plain.loads)[..., 0].max()
+    end_crowned = np.asarray(crowned.loads)[..., 0].max()
+    assert end_plain > 2 * np.asarray(plain.loads)[..., -1].max()
+    assert end_crowned < 0.6 * end_plain
+
+
+def test_tip_relief_unloads_the_tip(spur_pair):
+    pairs = pair_window(spur_pair)
+    s_tip = float(spur_pair.tip_roll_length[0])
+    relief = FlankModification(tip_relief=0.015, tip_relief_length=3.0)
+    torque = 200.0 * float(spur_pair.base_radius[0]) * float(spur_pair.face_width)
+    tca0, plain = analyse(spur_pair, FlankDepth(), torque, SLICE, ACC, pairs)
+    tca1, relieved = analyse(spur_pair, FlankDepth(pinion=relief), torque, SLICE, ACC, pairs)
+
+    def tip_load(tca, ltca):
+        s = np.asarray(tca.pinion_parameter)[..., : ACC.face_slices]
+        return np.sum(np.where(s > s_tip - 1.5, np.asarray(ltca.loads), 0.0))
+
+    assert tip_load(tca1, relieved) < 0.5 * tip_load(tca0, plain)
+    # relief moves load to the other pair: the peak share rises
+    assert float(relieved.max_load_share) >= float(plain.max_load_share) - 1e-9
+
+
+def test_gradients_of_lte_and_stiffness_match_central_differences(seed_pair):
+    acc = Accuracy(positions_per_pitch=6, face_slices=9)
+    pairs = pair_window(seed_pair)
+    y0 = jnp.array([0.012, 0.010, 6.0, 7.0, 0.010, 6.0])
+
+    @eqx.filter_jit
+    def objectives(y, torque):
+        depth = FlankDepth(pinion=FlankModification.from_vector(y))
+        _, ltca = analyse(seed_pair, depth, torque, SLICE, acc, pairs)
+        return jnp.mean(ltca.transmission_error_line), ltca.mean_mesh_stiffness
+
+    for which in (0, 1):
+        def f(y, t):
+            return objectives(y, t)[which]
+
+        gy, gt = jax.grad(f, argnums=(0, 1))(y0, jnp.asarray(8.0e5))
+        steps = np.array([1e-6, 1e-6, 1e-4, 1e-4, 1e-6, 1e-4])
+        fd = np.array([
+            (float(f(y0.at[i].add(h), 8.0e5)) - float(f(y0.at[i].add(-h), 8.0e5))) / (2 * h)
+            for i, h in enumerate(steps)
+        ])
+        fd_t = (float(f(y0, 8.0e5 + 50.0)) - float(f(y0, 8.0e5 - 50.0))) / 100.0
+        scale = np.max(np.abs(fd))
+        np.testing.assert_allclose(np.asarray(gy), fd, rtol=1e-3, atol=1e-4 * scale)
+        assert float(gt) == pytest.approx(fd_t, rel=1e-3)
+        assert np.all(np.abs(fd) > 1e-6), fd  # all six parameters move the objective
