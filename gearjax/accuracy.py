@@ -43,7 +43,7 @@ class Accuracy(eqx.Module):
         impact_max_steps: bisection cap of the first-contact search (each step halves the
             bracket, one grid step wide at the start).
         impact_fit_points: forces at which the local force-approach curve at the impact
-            point is computed for the fit $F = K_s\delta^n$.
+            point is computed for the fit $F = K_s\\delta^n$.
         impact_fit_range: (low, high) of those forces as fractions of the reference load
             (the static normal load, at least 10 N per mm of face width).
         dtype: "float64" (reference; needs `jax.config.update("jax_enable_x64", True)`)

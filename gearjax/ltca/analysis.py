@@ -208,7 +208,7 @@ def loaded_contact_analysis(
             the active flanks (`flank_weights`).
         active_pairs: optional mask over the tooth pairs of the window; pairs outside it
             carry no load (the impact search uses it to load only the pairs already in mesh).
-        rates: also compute $\mathrm d\Theta/\mathrm dT$ (tangent mesh stiffness); without
+        rates: also compute $\\mathrm d\\Theta/\\mathrm dT$ (tangent mesh stiffness); without
             it `rotation_rate` is NaN and the program is smaller.
     """
     n_mid = accuracy.face_slices
