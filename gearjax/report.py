@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from .scene import Scene, SimulationResult
+from .tca import KIND_NAMES
 from .units import UM_PER_MM, URAD_PER_RAD
 
 
@@ -104,11 +105,40 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
     }
 
 
+def impact_dict(scene: Scene, result: SimulationResult) -> dict:
+    imp = result.impact
+    stiff = imp.stiffness
+    return {
+        "force_N": _f(imp.force),
+        "velocity_mm_per_s": _f(imp.velocity),
+        "regime": imp.regime_name,
+        "contact_kind": KIND_NAMES[int(imp.kind)],
+        "point_mm": _list(imp.pinion_point),
+        "gear_point_mm": _list(imp.gear_point),
+        "normal": _list(imp.normal),
+        "pinion_roll_length_mm": _f(imp.pinion_parameter),
+        "gear_roll_length_mm": _f(imp.gear_parameter),
+        "face_position_mm": _f(imp.slice_z),
+        "pinion_angle_deg": _f(imp.pinion_angle) * 180.0 / math.pi,
+        "loaded_te_um": _f(imp.loaded_te) * _f(result.ltca.action_radius[1]) * UM_PER_MM,
+        "stiffness_coefficient_N_per_mm_n": _f(stiff.coefficient),
+        "stiffness_exponent": _f(stiff.exponent),
+        "stiffness_fit_error": _f(stiff.fit_error),
+        "equivalent_mass_kg": _f(imp.mass) * 1e3,
+        "seed_equivalent_mass_kg": _f(imp.seed_mass) * 1e3,
+        "approach_um": _f(imp.approach) * UM_PER_MM,
+        "kinetic_energy_J": _f(imp.kinetic_energy) * 1e-3,
+        "converged": bool(np.asarray(imp.converged)) and bool(np.asarray(imp.found)),
+    }
+
+
 def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None = None) -> dict:
     """Everything `gearjax run --json` prints."""
     out = {"geometry": geometry_dict(scene), "tca": tca_dict(scene, result)}
     if result.ltca is not None:
         out["ltca"] = ltca_dict(scene, result)
+    if result.impact is not None:
+        out["impact"] = impact_dict(scene, result)
     out["operating"] = {
         "torque_Nm": None if scene.operating.torque is None else _f(scene.operating.torque) / 1000.0,
         "speed_rpm": _f(scene.operating.speed) * 60.0 / (2 * math.pi),
@@ -155,6 +185,17 @@ def summary(out: dict) -> str:
         ]
         if not lt["converged"]:
             lines.append("  warning: the contact solve did not converge at every position")
+    if "impact" in out:
+        im = out["impact"]
+        lines += [
+            f"Mesh-in impact ({im['regime']} contact, {im['contact_kind']})",
+            f"  impact force         F_s = {im['force_N']:.0f} N, normal velocity v_n = {im['velocity_mm_per_s']:.1f} mm/s",
+            f"  local stiffness      F = {im['stiffness_coefficient_N_per_mm_n']:.4g} delta^{im['stiffness_exponent']:.3f} (N, mm)",
+            f"  point M              pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
+            f"m_eq = {im['equivalent_mass_kg']:.3f} kg",
+        ]
+        if not im["converged"]:
+            lines.append("  warning: the first-contact search or a contact solve did not converge")
     for note in out.get("notes", []):
         lines.append(f"Note: {note}")
     return "\n".join(lines)

@@ -31,6 +31,7 @@ from .geometry._base import AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
+from .impact import ImpactResult, impact_analysis
 from .ltca import IsoCompliance, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .units import Material, newton_metre_to_newton_mm, rpm_to_rad_per_s
@@ -85,7 +86,7 @@ class Scene(eqx.Module):
             root radius.
         inertia: $(J_1, J_2)$ of the whole rotating assemblies (t·mm²; 1 kg·m² = 1e3 t·mm²)
             for the impact's equivalent mass, or None for the gear bodies as solid discs
-            $\pi\rho b(r_b^4 - r_h^4)/2$ (seed 001).
+            $\\pi\\rho b(r_b^4 - r_h^4)/2$ (seed 001).
         effects: stages beyond TCA (static): subset of {"ltca", "impact"}; "ltca" is added
             whenever a torque is given, and "impact" needs it.
         accuracy: discretisation and solver settings (static).
@@ -223,7 +224,7 @@ class SimulationResult(eqx.Module):
 
     tca: TCAResult
     ltca: LTCAResult | None = None
-    impact: object | None = None
+    impact: ImpactResult | None = None
 
 
 def _x64_enabled() -> bool:
@@ -287,7 +288,25 @@ def _simulate(scene: Scene) -> SimulationResult:
                 accuracy=scene.accuracy,
                 extended_contact=scene.extended_contact,
             )
-    return SimulationResult(tca=tca, ltca=ltca)
+    impact = None
+    if "impact" in scene.effects:
+        with jax.named_scope("stage_impact"):
+            impact = impact_analysis(
+                scene.pair,
+                scene.depth,
+                tca,
+                ltca,
+                torque=scene.operating.torque,
+                speed=scene.operating.speed,
+                compliance=scene.compliance,
+                material=scene.material,
+                hub_radius=scene.hub_radius,
+                accuracy=scene.accuracy,
+                pairs=scene.pairs,
+                extended_contact=scene.extended_contact,
+                inertia=scene.inertia,
+            )
+    return SimulationResult(tca=tca, ltca=ltca, impact=impact)
 
 
 def program_text(scene: Scene) -> str:

@@ -58,9 +58,10 @@ speed_rpm = 5000.0
 
 [analysis]
 accuracy = "default"
+effects = ["impact"]         # LTCA runs whenever a torque is given
 """
 
-_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "analysis")
+_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis")
 _PAIR_KEYS = {
     "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
     "face_width", "profile_shift", "center_distance", "addendum_coefficient",
@@ -200,6 +201,13 @@ def scene_from_dict(data: dict) -> Scene:
     if not isinstance(extended, bool):
         raise _fail("ltca.extended_contact", f"must be true or false; got {extended!r}")
 
+    impact = data.get("impact", {})
+    _unknown("impact", impact, {"inertia_kg_m2"})
+    inertia = None
+    if "inertia_kg_m2" in impact:
+        # 1 kg m^2 = 1e-3 t * 1e6 mm^2 = 1e3 t mm^2
+        inertia = [1e3 * v for v in _numbers("impact", "inertia_kg_m2", impact["inertia_kg_m2"], 2)]
+
     analysis = data.get("analysis", {})
     _unknown("analysis", analysis, _ANALYSIS_KEYS)
     preset = analysis.get("accuracy", "default")
@@ -228,6 +236,7 @@ def scene_from_dict(data: dict) -> Scene:
         material=material,
         compliance=compliance,
         hub_radius=hub_radius,
+        inertia=inertia,
         effects=tuple(effects),
         accuracy=accuracy,
         pitches=pitches,

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 
 from ._custom_types import ArrayLike
 from ._numerics import as_float
 from ._validate import check_range
 from .ltca import LTCAResult, loaded_contact_analysis
-from .scene import Scene, _prepare
+from .scene import Scene, _prepare, simulate
 from .tca import TCAResult, tooth_contact_analysis
 
 
@@ -59,3 +60,37 @@ def _load_sweep(scene: Scene, torques) -> LoadSweep:
         )
 
     return LoadSweep(tca=tca, ltca=jax.vmap(one)(torques))
+
+
+def regime_transition(scene: Scene, low: float, high: float, *, tolerance: float = 1e-3) -> tuple[float, float]:
+    """Torque bracket (N·mm) of the switch from surface to edge mesh-in contact.
+
+    Bisection on the impact regime between `low` (surface) and `high` (edge), each step a
+    `simulate` of the same compiled program, until the bracket is narrower than
+    `tolerance` times `high`. The transition load is where the loaded approach of the
+    pairs in mesh closes the modification's clearance exactly at the gear's tip edge
+    (seed 001: TE = LTE at the start of engagement).
+
+    Returns:
+        `(below, above)`: the largest torque found with surface contact and the smallest
+        with edge contact.
+    """
+    if "impact" not in scene.effects:
+        raise ValueError("regime_transition needs a scene with effects including 'impact'")
+
+    def regime(torque: float) -> int:
+        s = eqx.tree_at(lambda sc: sc.operating.torque, scene, jnp.asarray(torque, jnp.result_type(float)))
+        return int(simulate(s).impact.regime)
+
+    if regime(low) != 0 or regime(high) != 1:
+        raise ValueError(
+            f"regime_transition needs surface contact at low = {low} and edge contact at "
+            f"high = {high} N·mm; got {regime(low)} and {regime(high)} (0 surface, 1 edge)"
+        )
+    while high - low > tolerance * high:
+        mid = 0.5 * (low + high)
+        if regime(mid) == 0:
+            low = mid
+        else:
+            high = mid
+    return low, high

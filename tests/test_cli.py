@@ -48,10 +48,28 @@ def test_default_scene_json_has_the_ltca_keys(default_json):
     assert lt["converged"] and lt["compliance"] == "SliceCompliance"
 
 
+def test_default_scene_json_has_the_impact_keys(default_json):
+    im = default_json["impact"]
+    assert im["regime"] in ("edge", "surface")
+    assert (im["regime"] == "edge") == (im["contact_kind"] != "flank")
+    assert len(im["point_mm"]) == 3 and len(im["normal"]) == 3
+    assert math.isclose(sum(v * v for v in im["normal"]), 1.0, rel_tol=1e-9)
+    # the strike point lies on the pinion flank: its radius matches its roll length
+    x, y, _ = im["point_mm"]
+    rb1 = default_json["geometry"]["base_radius_mm"][0]
+    assert math.hypot(x, y) == pytest.approx(math.hypot(rb1, im["pinion_roll_length_mm"]), rel=1e-9)
+    assert im["velocity_mm_per_s"] > 0 and im["force_N"] > 0
+    # energy method: F = K delta^n at the peak approach
+    k, n = im["stiffness_coefficient_N_per_mm_n"], im["stiffness_exponent"]
+    assert im["force_N"] == pytest.approx(k * (im["approach_um"] * 1e-3) ** n, rel=1e-9)
+    assert im["converged"]
+
+
 def test_summary_is_readable(capsys):
     assert main(["run"]) == 0
     out = capsys.readouterr().out
     assert "centre distance" in out and "281.845" in out and "TE peak-to-peak" in out
+    assert "Mesh-in impact" in out and "impact force" in out
     assert "inconsistent" in out  # the paper's centre distance note
 
 
@@ -99,6 +117,9 @@ accuracy = "fast"
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\naccuracy = 'best'\n", "accuracy preset"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncenter_distance = 261.0\n", "center_distance"),
         ("[pair\nteeth = 1\n", "not valid TOML"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[impact]\ninertia_kg_m2 = [1.0]\n", "impact.inertia_kg_m2"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\neffects = ['impact']\n", "needs a torque"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[ltca]\ncompliance = 'fem'\n", "ltca.compliance"),
     ],
 )
 def test_bad_scene_files_give_one_line_and_status_2(tmp_path, capsys, text, field):

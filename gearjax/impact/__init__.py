@@ -1,0 +1,10 @@
+"""Mesh-in impact: first contact under load, impact velocity, local stiffness and force."""
+
+from .analysis import REGIMES as REGIMES, ImpactResult as ImpactResult, impact_analysis as impact_analysis
+from .energy import (
+    equivalent_mass as equivalent_mass,
+    gear_inertia as gear_inertia,
+    impact_force as impact_force,
+    seed_equivalent_mass as seed_equivalent_mass,
+)
+from .stiffness import LocalStiffness as LocalStiffness, local_stiffness as local_stiffness
