@@ -46,6 +46,7 @@ def main(argv=None):
     parser.add_argument("--slices", type=int, default=21)
     parser.add_argument("--chunk", type=int, default=256, help="designs per vmapped chunk")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--name", default="tca", help="results file benchmarks/results/NAME.json")
     args = parser.parse_args(argv)
 
     pair = gj.InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)
@@ -84,7 +85,7 @@ def main(argv=None):
             rows.append(row)
             print(f"{method:16s} {n:6d} designs: compile {compile_s:6.2f} s, run {run_s:9.4f} s "
                   f"({n / run_s:10.1f} designs/s)", flush=True)
-            write("tca", {"machine": machine(), "rows": rows})
+            write(args.name, {"machine": machine(), "rows": rows})
 
     print("\n| method | designs | compile (s) | run (s) | designs/s |")
     print("|---|---:|---:|---:|---:|")
