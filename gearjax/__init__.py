@@ -16,6 +16,7 @@ from . import units as units
 from .accuracy import Accuracy as Accuracy
 from .geometry import (
     AbstractGearPair as AbstractGearPair,
+    CurvilinearGearPair as CurvilinearGearPair,
     InvoluteGearPair as InvoluteGearPair,
 )
 from .geometry.depth import FlankDepth as FlankDepth

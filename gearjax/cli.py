@@ -1,6 +1,7 @@
 """The `gearjax` command.
 
     gearjax run [SCENE.toml] [--json]
+    gearjax reproduce curvilinear [--json]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
@@ -46,17 +47,28 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reproduce(args: argparse.Namespace) -> int:
+    from . import reproduce
+
+    out = reproduce.curvilinear()
+    print(json.dumps(out, indent=2) if args.json else reproduce.summary_curvilinear(out))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="gearjax", description="Differentiable gear contact engine.")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="simulate a scene (default: the built-in seed 001 scene)")
     run.add_argument("scene", nargs="?", help="TOML scene file")
     run.add_argument("--json", action="store_true", help="print one JSON object")
+    rep = sub.add_parser("reproduce", help="a paper's quantities beside gearjax's")
+    rep.add_argument("paper", choices=["curvilinear"], help="curvilinear: seed 002")
+    rep.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     _enable_x64()
     if args.command == "run":
         return _run(args)
-    return 2
+    return _reproduce(args)
 
 
 if __name__ == "__main__":

@@ -53,6 +53,9 @@ def geometry_dict(scene: Scene) -> dict:
                 "tip_roll_length_mm": _list(pair.tip_roll_length),
             }
         )
+    if hasattr(pair, "tooth_trace_radius"):
+        out["tooth_trace_radius_mm"] = _f(pair.tooth_trace_radius)
+        out["contact_line_length_mm"] = _f(pair.contact_line_length)
     return out
 
 

@@ -13,6 +13,7 @@ from typing import Any
 
 from .accuracy import Accuracy
 from .geometry.errors import MeshErrors
+from .geometry.curvilinear import CurvilinearGearPair
 from .geometry.involute import InvoluteGearPair
 from .geometry.modification import FlankModification
 from .ltca import IsoCompliance, SliceCompliance
@@ -65,7 +66,7 @@ _SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating",
 _PAIR_KEYS = {
     "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
     "face_width", "profile_shift", "center_distance", "addendum_coefficient",
-    "dedendum_coefficient", "root_radius_coefficient",
+    "dedendum_coefficient", "root_radius_coefficient", "tooth_trace_radius",
 }
 _MOD_KEYS = {
     "root_relief_um": ("root_relief", 1e-3),
@@ -129,8 +130,13 @@ def scene_from_dict(data: dict) -> Scene:
     p = data["pair"]
     _unknown("pair", p, _PAIR_KEYS)
     family = p.get("family", "involute")
-    if family != "involute":
-        raise _fail("pair.family", f"must be 'involute'; got {family!r}")
+    if family not in ("involute", "curvilinear"):
+        raise _fail("pair.family", f"must be 'involute' or 'curvilinear'; got {family!r}")
+    only = {"involute": ("helix_angle_deg", "hand"), "curvilinear": ("tooth_trace_radius",)}
+    for other, keys in only.items():
+        for key in keys:
+            if other != family and key in p:
+                raise _fail(f"pair.{key}", f"applies to family = '{other}' only")
     for required in ("teeth", "normal_module"):
         if required not in p:
             raise _fail(f"pair.{required}", "missing required field")
@@ -146,7 +152,13 @@ def scene_from_dict(data: dict) -> Scene:
             kwargs[key] = _numbers("pair", key, p[key], 2) if isinstance(p[key], list) else _number("pair", key, p[key])
     if "hand" in p:
         kwargs["hand"] = p["hand"]
-    pair = _build("pair", InvoluteGearPair, **kwargs)
+    if family == "curvilinear":
+        kwargs["module"] = kwargs.pop("normal_module")
+        if "tooth_trace_radius" in p:
+            kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])
+        pair = _build("pair", CurvilinearGearPair, **kwargs)
+    else:
+        pair = _build("pair", InvoluteGearPair, **kwargs)
 
     mods = {}
     for section in ("modification", "gear_modification"):

@@ -38,10 +38,11 @@ def test_default_scene_json_has_the_ltca_keys(default_json):
     lt = default_json["ltca"]
     assert lt["torque_Nm"] == pytest.approx(1000.0)
     assert default_json["operating"]["torque_Nm"] == pytest.approx(1000.0)
-    # Normal load of the transverse tangential force T/r_b1 over cos(beta_b).
+    # Normal load T/(r_b1 cos beta_b): exact for perfect flanks; the modified flanks' contact
+    # normals tilt slightly (and edge contacts have other arms), within 1e-4 here.
     rb1 = default_json["geometry"]["base_radius_mm"][0]
     beta_b = math.radians(default_json["geometry"]["base_helix_angle_deg"])
-    assert lt["normal_load_N"] == pytest.approx(1e6 / rb1 / math.cos(beta_b), rel=1e-9)
+    assert lt["normal_load_N"] == pytest.approx(1e6 / rb1 / math.cos(beta_b), rel=1e-4)
     assert lt["lte_peak_to_peak_um"] == pytest.approx(max(lt["lte_um"]) - min(lt["lte_um"]), rel=1e-9)
     assert 0.5 < lt["max_load_share"] <= 1.0
     assert 5.0 < lt["mean_mesh_stiffness_N_per_mm_um"] < 40.0
@@ -54,10 +55,11 @@ def test_default_scene_json_has_the_impact_keys(default_json):
     assert (im["regime"] == "edge") == (im["contact_kind"] != "flank")
     assert len(im["point_mm"]) == 3 and len(im["normal"]) == 3
     assert math.isclose(sum(v * v for v in im["normal"]), 1.0, rel_tol=1e-9)
-    # the strike point lies on the pinion flank: its radius matches its roll length
+    # the strike point lies on the pinion flank: its radius matches its roll length up to
+    # the modification depth there (crowning + root relief, < 15 um)
     x, y, _ = im["point_mm"]
     rb1 = default_json["geometry"]["base_radius_mm"][0]
-    assert math.hypot(x, y) == pytest.approx(math.hypot(rb1, im["pinion_roll_length_mm"]), rel=1e-9)
+    assert math.hypot(x, y) == pytest.approx(math.hypot(rb1, im["pinion_roll_length_mm"]), abs=0.015)
     assert im["velocity_mm_per_s"] > 0 and im["force_N"] > 0
     # energy method: F = K delta^n at the peak approach
     k, n = im["stiffness_coefficient_N_per_mm_n"], im["stiffness_exponent"]
@@ -120,6 +122,10 @@ accuracy = "fast"
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[impact]\ninertia_kg_m2 = [1.0]\n", "impact.inertia_kg_m2"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\neffects = ['impact']\n", "needs a torque"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[ltca]\ncompliance = 'fem'\n", "ltca.compliance"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ntooth_trace_radius = 30.0\n", "pair.tooth_trace_radius"),
+        ("[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nface_width = 20.0\ntooth_trace_radius = 9.0\n", "tooth_trace_radius"),
+        ("[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nhelix_angle_deg = 10.0\n", "pair.helix_angle_deg"),
+        ("[pair]\nfamily = 'cycloid'\nteeth = [20, 30]\nnormal_module = 2.0\n", "pair.family"),
     ],
 )
 def test_bad_scene_files_give_one_line_and_status_2(tmp_path, capsys, text, field):
@@ -141,3 +147,25 @@ def test_working_pressure_angle_is_consistent(default_json):
     g = default_json["geometry"]
     a, rb = g["center_distance_mm"], g["base_radius_mm"]
     assert math.degrees(math.acos((rb[0] + rb[1]) / a)) == pytest.approx(g["working_pressure_angle_deg"], rel=1e-12)
+
+
+def test_curvilinear_scene_file_and_reproduce(tmp_path, capsys):
+    path = tmp_path / "curvilinear.toml"
+    path.write_text(
+        "[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nface_width = 20.0\n"
+        "tooth_trace_radius = 12.0\n[analysis]\npositions_per_pitch = 8\nface_slices = 5\n"
+    )
+    assert main(["run", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    g = out["geometry"]
+    assert g["family"] == "CurvilinearGearPair" and g["tooth_trace_radius_mm"] == 12.0
+    assert g["contact_line_length_mm"] == pytest.approx(24.0 * math.asin(10.0 / 12.0), rel=1e-12)
+    assert g["center_distance_mm"] == pytest.approx(50.0, rel=1e-12)
+    assert abs(out["tca"]["te_peak_to_peak_um"]) < 1e-9  # conjugate line contact
+
+    assert main(["reproduce", "curvilinear", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["theta_t_prime"]["gearjax"] == pytest.approx(rep["theta_t_prime"]["paper"], abs=5e-5)
+    for row in rep["contact_lines"]:
+        assert row["all_slices_in_contact"] and row["max_distance_from_arc_mm"] < 1e-9
+        assert row["length_mm"] == pytest.approx(row["closed_form_length_mm"], rel=1e-4)

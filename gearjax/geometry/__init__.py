@@ -2,3 +2,4 @@
 
 from ._base import AbstractGearPair as AbstractGearPair
 from .involute import InvoluteGearPair as InvoluteGearPair
+from .curvilinear import CurvilinearGearPair as CurvilinearGearPair

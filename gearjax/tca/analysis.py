@@ -342,7 +342,13 @@ def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int,
                 return _contact_residual(y, (make_problem(pair, depth, k, zz, phi1), selector, y, True))
 
             y = jnp.stack([u1, u2, offset])
-            return _peak_correction(residual, y, z[..., j], lead_correction, half, limits)
+            rise = _peak_correction(residual, y, z[..., j], lead_correction, half, limits)
+            if getattr(pair, "linear_lead", True):
+                return rise
+            # A curved lead bends the tip edges' offsets g(z) far from a parabola, so one
+            # Newton step would overshoot (seen: +4e-4 rad on a conjugate curvilinear pair);
+            # edge candidates then keep their slice value.
+            return jnp.where(kind_j == FLANK, rise, 0.0)
 
         def pick(a):
             return jnp.take_along_axis(a[..., :n_mid], best[..., None], -1)[..., 0]
