@@ -1,7 +1,7 @@
 """The `gearjax` command.
 
     gearjax run [SCENE.toml] [--json]
-    gearjax reproduce curvilinear [--json]
+    gearjax reproduce curvilinear|dca [--json]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
@@ -50,6 +50,10 @@ def _run(args: argparse.Namespace) -> int:
 def _reproduce(args: argparse.Namespace) -> int:
     from . import reproduce
 
+    if args.paper == "dca":
+        out = reproduce.dca()
+        print(json.dumps(out, indent=2) if args.json else reproduce.summary_dca(out))
+        return 0
     out = reproduce.curvilinear()
     print(json.dumps(out, indent=2) if args.json else reproduce.summary_curvilinear(out))
     return 0
@@ -62,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("scene", nargs="?", help="TOML scene file")
     run.add_argument("--json", action="store_true", help="print one JSON object")
     rep = sub.add_parser("reproduce", help="a paper's quantities beside gearjax's")
-    rep.add_argument("paper", choices=["curvilinear"], help="curvilinear: seed 002")
+    rep.add_argument("paper", choices=["curvilinear", "dca"], help="curvilinear: seed 002; dca: seeds 000/003")
     rep.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
     _enable_x64()

@@ -1,5 +1,8 @@
 """`gearjax reproduce ...`: a paper's quantities beside gearjax's.
 
+* `dca` (seeds 000/003): formula (27)-(28) for m_n 4, z 24/24, b 55 mm, beta 15 deg, and
+  Tables 1-2 recomputed with formula (7) in the paper's mixed units and in consistent units.
+
 * `curvilinear` (seed 002): the seed pair d1 40, d2 60 mm (m 2, z 20/30), b 20 mm, α 20°,
   R_t 12 mm, pinion turned by β1 = π/12. The contact line found by the general TCA is
   compared with the closed form (seed 002 eq. 18): its points with the arc
@@ -82,4 +85,32 @@ def summary_curvilinear(out: dict) -> str:
             f"  {r['tooth_trace_radius_mm']:8.4g} | {r['closed_form_length_mm']:22.6f} | {r['length_mm']:12.6f} | "
             f"{r['length_mm'] / r['closed_form_length_mm'] - 1:+9.1e} | {r['max_distance_from_arc_mm']:16.1e} | {r['te_rad']:.1e}"
         )
+    return "\n".join(lines)
+
+
+def dca() -> dict:
+    from .geometry.double_arc import axial_meshing
+    from .impact.double_arc import seed_tables
+
+    facts = axial_meshing(4.0, 15.0, 55.0)
+    paper = {"axial_pitch": 48.55, "convex_to_concave": 41.85, "concave_to_convex": 6.70, "face_excess": 6.45}
+    return {
+        "formula_27_mm": {k: {"paper": v, "gearjax": float(getattr(facts, k))} for k, v in paper.items()},
+        "condition_28": bool(facts.condition_28),
+        "tables_paper_units": seed_tables(paper_units=True),
+        "tables_newton": seed_tables(paper_units=False),
+    }
+
+
+def summary_dca(out: dict) -> str:
+    lines = ["Seeds 000/003: double circular arc gears (GB/T 12759), m_n 4, z 24/24, b 55 mm, beta 15 deg",
+             "  formula (27), mm:        paper    gearjax"]
+    for k, v in out["formula_27_mm"].items():
+        lines.append(f"  {k:20s} {v['paper']:9.2f} {v['gearjax']:10.4f}")
+    lines.append(f"  formula (28) dB < P_x - q_TA: {out['condition_28']} (three meshing points)")
+    p, si = out["tables_paper_units"], out["tables_newton"]
+    lines.append("  formula (7), paper units (kg mm^2; sqrt(1000) N) | consistent units (N):")
+    for t in ("table1", "table2"):
+        for col, a, b, c in zip(("concave in", "concave out", "convex in", "convex out"), p[t]["paper"], p[t]["gearjax"], si[t]["gearjax"]):
+            lines.append(f"  {t} {col:11s} paper {a:9.5g}  gearjax {b:9.5g} ({b / a - 1:+.1e})  | {c:8.1f} N")
     return "\n".join(lines)

@@ -169,3 +169,13 @@ def test_curvilinear_scene_file_and_reproduce(tmp_path, capsys):
     for row in rep["contact_lines"]:
         assert row["all_slices_in_contact"] and row["max_distance_from_arc_mm"] < 1e-9
         assert row["length_mm"] == pytest.approx(row["closed_form_length_mm"], rel=1e-4)
+
+
+def test_reproduce_dca_json(capsys):
+    assert main(["reproduce", "dca", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for v in out["formula_27_mm"].values():
+        assert round(v["gearjax"], 2) == pytest.approx(v["paper"], abs=1e-9)
+    for t in ("table1", "table2"):
+        for paper, ours in zip(out["tables_paper_units"][t]["paper"], out["tables_paper_units"][t]["gearjax"]):
+            assert ours == pytest.approx(paper, rel=3e-4)
