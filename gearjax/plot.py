@@ -26,12 +26,16 @@ def _axes(ax):
 def transmission_error(result, ax=None, label=None, **kwargs):
     """Unloaded TE of a `TCAResult` (um along the line of action) against the pinion angle
     (deg)."""
-    ax = _axes(ax)
-    angle = np.degrees(np.asarray(result.pinion_angle))
     te = np.asarray(result.transmission_error) * float(np.asarray(result.action_radius)) * 1e3
-    ax.plot(angle, te, label=label, **kwargs)
+    return _te_curve(ax, result.pinion_angle, te, "TE along line of action (um)", label, **kwargs)
+
+
+def _te_curve(ax, pinion_angle, te_um, ylabel, label, **kwargs):
+    """A TE curve (um) against the pinion angle (rad, shown in deg)."""
+    ax = _axes(ax)
+    ax.plot(np.degrees(np.asarray(pinion_angle)), te_um, label=label, **kwargs)
     ax.set_xlabel("pinion angle (deg)")
-    ax.set_ylabel("TE along line of action (um)")
+    ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     if label is not None:
         ax.legend()
@@ -83,15 +87,8 @@ def separation_map(result, position: int, ax=None):
 
 def loaded_transmission_error(ltca, ax=None, label=None, **kwargs):
     """Loaded TE of an `LTCAResult` (um along the line of action) against pinion angle."""
-    ax = _axes(ax)
-    angle = np.degrees(np.asarray(ltca.pinion_angle))
-    ax.plot(angle, np.asarray(ltca.transmission_error_line) * 1e3, label=label, **kwargs)
-    ax.set_xlabel("pinion angle (deg)")
-    ax.set_ylabel("loaded TE along line of action (um)")
-    ax.grid(True, alpha=0.3)
-    if label is not None:
-        ax.legend()
-    return ax
+    te = np.asarray(ltca.transmission_error_line) * 1e3
+    return _te_curve(ax, ltca.pinion_angle, te, "loaded TE along line of action (um)", label, **kwargs)
 
 
 def load_sharing(ltca, ax=None):

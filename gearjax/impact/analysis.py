@@ -49,7 +49,7 @@ import optimistix as optx
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide
 from ..accuracy import Accuracy
-from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis
+from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis, moment_arms
 from ..tca import TCAResult, tooth_contact_analysis
 from .energy import equivalent_mass, gear_inertia, impact_force, seed_equivalent_mass
 from .stiffness import LocalStiffness, local_stiffness
@@ -288,9 +288,8 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     n = tca.normal[0, column, j]
     kind = tca.kind[0, column, j]
     center2 = pair.center(1)
-    p_arm = x1[0] * n[1] - x1[1] * n[0]
+    p_arm, q_arm = moment_arms(x1, n, center2)
     r2 = x1[:2] - center2
-    q_arm = -(r2[0] * n[1] - r2[1] * n[0])
     # v12 = v1 - v2; the loaded gear turns faster by LTE' w1 about its axis (-z).
     gear_extra = jnp.stack([r2[1], -r2[0], jnp.zeros_like(r2[0])])  # (-e_z) x r2
     v12 = speed * (tca.relative_velocity[0, column, j] - dlte * gear_extra)
@@ -314,12 +313,11 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
     fit = local_stiffness(matrix, nonlinear, points.exponent, separation, valid, reference, acc)
 
+    radii = jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1)
     if inertia is None:
-        radii = jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1)
         inertia = gear_inertia(ctx.material.density, pair.face_width, radii, ctx.hub_radius)
     else:
         inertia = jnp.asarray(inertia, te.dtype)
-    radii = jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1)
     mass = equivalent_mass(inertia, p_arm, q_arm)
     force, approach = impact_force(mass, velocity, fit.coefficient, fit.exponent)
     v = jnp.maximum(velocity, 0.0)

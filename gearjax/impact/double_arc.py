@@ -25,6 +25,7 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_range
+from .energy import gear_inertia
 
 #: Seed 000, Tables 1 and 2 (t1 < t2): columns concave mesh-in, concave mesh-out, convex
 #: mesh-in, convex mesh-out. Stiffness N/mm, velocity mm/s, force N (the seed's units).
@@ -37,11 +38,6 @@ SEED_TABLES = {
 #: The seed case: m_n 4 mm, z 24/24, b 55 mm, beta 15 deg, alpha 24 deg, n = 3.
 SEED_CASE = {"normal_module": 4.0, "teeth": (24, 24), "face_width": 55.0, "helix_angle_deg": 15.0,
              "pressure_angle_deg": 24.0, "meshing_points": 3}
-
-
-def disc_inertia(density: ArrayLike, face_width: ArrayLike, radius: ArrayLike) -> Scalar:
-    """$J = \\pi\\rho bR^4/2$ (units of $\\rho\\cdot$mm⁵)."""
-    return 0.5 * math.pi * as_float(density) * as_float(face_width) * as_float(radius) ** 4
 
 
 def impact_force(
@@ -77,7 +73,7 @@ def seed_tables(paper_units: bool = True) -> dict:
     c = SEED_CASE
     radius = c["normal_module"] * c["teeth"][0] / (2 * math.cos(math.radians(c["helix_angle_deg"])))
     density = 7.85e-6 if paper_units else 7.85e-9  # kg/mm^3 (paper) or t/mm^3
-    j = disc_inertia(density, c["face_width"], radius)
+    j = gear_inertia(density, c["face_width"], radius, 0.0)  # solid disc, no hub
     inertia = jnp.stack([j, j])
     radii = jnp.asarray([radius, radius])
     out = {"reference_radius_mm": radius, "inertia": float(j), "units": "paper (kg mm^2, sqrt(1000) N)" if paper_units else "N"}

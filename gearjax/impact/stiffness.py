@@ -24,7 +24,7 @@ import jax.numpy as jnp
 
 from .._custom_types import Array, Float, Scalar
 from ..accuracy import Accuracy
-from ..ltca.solver import NO_CONTACT, ContactProblem, solve_contact
+from ..ltca.solver import NO_CONTACT, ContactProblem, solve_with
 
 
 class LocalStiffness(eqx.Module):
@@ -83,14 +83,7 @@ def local_stiffness(
     separation = jnp.where(valid, separation, NO_CONTACT)
 
     def approach(force):
-        problem = ContactProblem(compliance, nonlinear, separation, ones, ones, force, exponent)
-        sol = solve_contact(
-            problem,
-            smoothing=accuracy.contact_smoothing,
-            rtol=accuracy.newton_rtol,
-            atol=accuracy.newton_atol,
-            max_steps=accuracy.contact_max_steps,
-        )
+        sol = solve_with(ContactProblem(compliance, nonlinear, separation, ones, ones, force, exponent), accuracy)
         return sol.rotation, sol.converged
 
     delta, converged = jax.vmap(approach)(forces)

@@ -28,7 +28,7 @@ from .._numerics import safe_divide, safe_sqrt
 from ..accuracy import Accuracy
 from ..tca import TCAResult
 from ..units import Material
-from .solver import NO_CONTACT, ContactProblem, solve_contact
+from .solver import NO_CONTACT, ContactProblem, solve_with
 
 
 class LTCAResult(eqx.Module):
@@ -119,15 +119,20 @@ class LTCAResult(eqx.Module):
         return jnp.max(self.pressure, axis=(-3, -2, -1))
 
 
-def _levers(tca: TCAResult, n_mid: int, center2):
-    """Pinion arm $p = (x\\times n)_z$ and gear arm $q = -((x - O_2)\\times n)_z$ (mm);
-    points without a contact get the position's mean."""
-    x = tca.pinion_point[..., :n_mid, :]
-    n = tca.normal[..., :n_mid, :]
-    valid = tca.valid[..., :n_mid]
+def moment_arms(x, n, center2):
+    """Pinion arm $p = (x\\times n)_z$ and gear arm $q = -((x - O_2)\\times n)_z$ (mm) of
+    the normal `n` through the point `x` (last axis 3): the torque per unit normal load on
+    the pinion, and the normal closure per unit lag of the gear."""
     p = x[..., 0] * n[..., 1] - x[..., 1] * n[..., 0]
     r = x[..., :2] - center2
     q = -(r[..., 0] * n[..., 1] - r[..., 1] * n[..., 0])
+    return p, q
+
+
+def _levers(tca: TCAResult, n_mid: int, center2):
+    """`moment_arms` of the slice contacts; points without a contact get the position's mean."""
+    valid = tca.valid[..., :n_mid]
+    p, q = moment_arms(tca.pinion_point[..., :n_mid, :], tca.normal[..., :n_mid, :], center2)
 
     def fill(a):
         mean = safe_divide(jnp.sum(jnp.where(valid, a, 0.0), axis=(-2, -1), keepdims=True),
@@ -231,14 +236,7 @@ def loaded_contact_analysis(
 
     def one(matrix, nonlinear, e, pa, qa):
         def solve(t):
-            problem = ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent)
-            return solve_contact(
-                problem,
-                smoothing=accuracy.contact_smoothing,
-                rtol=accuracy.newton_rtol,
-                atol=accuracy.newton_atol,
-                max_steps=accuracy.contact_max_steps,
-            )
+            return solve_with(ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent), accuracy)
 
         if rates:
             return jax.jvp(solve, (torque,), (jnp.ones_like(torque),))

@@ -102,6 +102,17 @@ class ContactSolution(eqx.Module):
     converged: Array
 
 
+def solve_with(problem: ContactProblem, accuracy) -> ContactSolution:
+    """`solve_contact` with the settings of an `Accuracy` (smoothing, tolerances, cap)."""
+    return solve_contact(
+        problem,
+        smoothing=accuracy.contact_smoothing,
+        rtol=accuracy.newton_rtol,
+        atol=accuracy.newton_atol,
+        max_steps=accuracy.contact_max_steps,
+    )
+
+
 def solve_contact(problem: ContactProblem, *, smoothing: float, rtol: float, atol: float, max_steps: int) -> ContactSolution:
     """Solve one position's contact problem (differentiable by the implicit adjoint)."""
     dtype = problem.separation.dtype
