@@ -53,6 +53,17 @@ def geometry_dict(scene: Scene) -> dict:
                 "tip_roll_length_mm": _list(pair.tip_roll_length),
             }
         )
+    if hasattr(pair, "axial_pitch_error"):
+        out.update(
+            {
+                "normal_module_mm": _f(pair.normal_module),
+                "helix_angle_deg": _f(pair.helix_angle) * deg,
+                "face_width_mm": _f(pair.face_width),
+                "pitch_radius_mm": _list(pair.pitch_radius),
+                "axial_pitch_mm": _f(pair.axial_pitch),
+                "axial_pitch_error_um": _f(pair.axial_pitch_error) * UM_PER_MM,
+            }
+        )
     if hasattr(pair, "tooth_trace_radius"):
         out["tooth_trace_radius_mm"] = _f(pair.tooth_trace_radius)
         out["contact_line_length_mm"] = _f(pair.contact_line_length)

@@ -88,18 +88,64 @@ def summary_curvilinear(out: dict) -> str:
     return "\n".join(lines)
 
 
-def dca() -> dict:
-    from .geometry.double_arc import axial_meshing
-    from .impact.double_arc import seed_tables
+def dca(cross_check: bool = False) -> dict:
+    """Seeds 000/003. `cross_check` adds the general TCA on the generated surfaces with the
+    same pitch error, both signs (~2 min, mostly compilation)."""
+    from .geometry.double_arc import DoubleArcGearPair, axial_meshing
+    from .impact.double_arc import (
+        SEED_PITCH_CIRCLE_ERROR, SEED_SPEED_RPM, SEED_VELOCITIES, STATES, four_state_impact, seed_tables,
+    )
 
     facts = axial_meshing(4.0, 15.0, 55.0)
     paper = {"axial_pitch": 48.55, "convex_to_concave": 41.85, "concave_to_convex": 6.70, "face_excess": 6.45}
-    return {
+    pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
+    states = four_state_impact(pair, SEED_PITCH_CIRCLE_ERROR, SEED_SPEED_RPM)
+    omega = 2 * SEED_SPEED_RPM * 2 * math.pi / 60
+    out = {
         "formula_27_mm": {k: {"paper": v, "gearjax": float(getattr(facts, k))} for k, v in paper.items()},
         "condition_28": bool(facts.condition_28),
         "tables_paper_units": seed_tables(paper_units=True),
         "tables_newton": seed_tables(paper_units=False),
+        "four_states": [
+            {
+                "state": name,
+                "paper_radius_mm": v / omega,
+                "radius_mm": float(states.radius[k]),
+                "exact_radius_mm": float(states.exact_radius[k]),
+                "paper_velocity_mm_per_s": v,
+                "velocity_mm_per_s": float(states.velocity[k]),
+            }
+            for k, (name, v) in enumerate(zip(STATES, SEED_VELOCITIES))
+        ],
     }
+    if cross_check:
+        out["tca_cross_check"] = dca_cross_check(pair)
+    return out
+
+
+def dca_cross_check(pair, positions_per_pitch: int = 32) -> list[dict]:
+    """First contacts of incoming pairs on the generated surfaces (general TCA) with the
+    seed's pitch-circle error, $\\Delta_\\alpha = \\mp\\Delta/\\tan\\beta$."""
+    from .geometry.double_arc import ZONE_NAMES
+    from .impact.double_arc import SEED_PITCH_CIRCLE_ERROR, SEED_SPEED_RPM, handover_impacts
+    from .tca.analysis import tooth_contact_analysis
+
+    rows = []
+    axial = SEED_PITCH_CIRCLE_ERROR / math.tan(float(pair.helix_angle))
+    omega = 2 * SEED_SPEED_RPM * 2 * math.pi / 60
+    for sign, label in ((-1.0, "t1 < t2"), (1.0, "t1 > t2")):
+        p = eqx.tree_at(lambda q: q.axial_pitch_error, pair, jnp.asarray(sign * axial))
+        tca = tooth_contact_analysis(p, accuracy=Accuracy(positions_per_pitch=positions_per_pitch))
+        h = handover_impacts(p, tca)
+        for j in range(1, len(h.radius)):  # row 0 compares the cycle's ends (TE is not periodic)
+            if float(h.pinion_angle[j]) == float(tca.pinion_angle[0]):
+                continue
+            rows.append({
+                "case": label, "zone": ZONE_NAMES[int(h.zone[j])], "kind": int(h.kind[j]),
+                "te_jump_urad": 1e6 * float(h.te_jump[j]), "radius_mm": float(h.radius[j]),
+                "velocity_mm_per_s": float(h.radius[j]) * omega,
+            })
+    return rows
 
 
 def summary_dca(out: dict) -> str:
@@ -109,6 +155,20 @@ def summary_dca(out: dict) -> str:
         lines.append(f"  {k:20s} {v['paper']:9.2f} {v['gearjax']:10.4f}")
     lines.append(f"  formula (28) dB < P_x - q_TA: {out['condition_28']} (three meshing points)")
     p, si = out["tables_paper_units"], out["tables_newton"]
+    lines.append("  four-state impact radius (formulas 9-26, repaired), 200 rpm, Delta 0.1 mm:")
+    lines.append("  state                        paper PE   gearjax PE   rel.     exact (15)  v_s paper  v_s gearjax")
+    for r in out["four_states"]:
+        lines.append(
+            f"  {r['state']:27s} {r['paper_radius_mm']:9.4f} {r['radius_mm']:11.4f} {r['radius_mm'] / r['paper_radius_mm'] - 1:+8.1e}"
+            f" {r['exact_radius_mm']:11.4f} {r['paper_velocity_mm_per_s']:10.2f} {r['velocity_mm_per_s']:11.2f}"
+        )
+    if "tca_cross_check" in out:
+        lines.append("  general TCA on the generated surfaces (first contact of the incoming pair, grid-resolved):")
+        for r in out["tca_cross_check"]:
+            lines.append(
+                f"  {r['case']} {r['zone']:22s} kind {r['kind']}  TE jump {r['te_jump_urad']:+8.1f} urad"
+                f"  PE {r['radius_mm']:.4f} mm  v_s {r['velocity_mm_per_s']:.2f} mm/s"
+            )
     lines.append("  formula (7), paper units (kg mm^2; sqrt(1000) N) | consistent units (N):")
     for t in ("table1", "table2"):
         for col, a, b, c in zip(("concave in", "concave out", "convex in", "convex out"), p[t]["paper"], p[t]["gearjax"], si[t]["gearjax"]):

@@ -142,6 +142,12 @@ class Scene(eqx.Module):
             raise ValueError("effects 'ltca' needs a torque: give operating=OperatingPoint(torque=...)")
         if "impact" in effects and operating.torque is None:
             raise ValueError("effects 'impact' needs a torque: give operating=OperatingPoint(torque=...)")
+        if getattr(pair, "contact_zones", None) is not None and effects:
+            raise ValueError(
+                f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}: loaded "
+                "contact of point-contact gears is not implemented; use the rigid TCA (no torque) and "
+                "gearjax.impact.double_arc for the seed's four-state impact model"
+            )
         if isinstance(accuracy, str):
             accuracy = Accuracy.preset(accuracy)
         if not isinstance(pitches, int) or pitches < 1:

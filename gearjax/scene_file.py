@@ -14,6 +14,7 @@ from typing import Any
 from .accuracy import Accuracy
 from .geometry.errors import MeshErrors
 from .geometry.curvilinear import CurvilinearGearPair
+from .geometry.double_arc import DoubleArcGearPair
 from .geometry.involute import InvoluteGearPair
 from .geometry.modification import FlankModification
 from .ltca import IsoCompliance, SliceCompliance
@@ -66,7 +67,7 @@ _SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating",
 _PAIR_KEYS = {
     "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
     "face_width", "profile_shift", "center_distance", "addendum_coefficient",
-    "dedendum_coefficient", "root_radius_coefficient", "tooth_trace_radius",
+    "dedendum_coefficient", "root_radius_coefficient", "tooth_trace_radius", "axial_pitch_error_um",
 }
 _MOD_KEYS = {
     "root_relief_um": ("root_relief", 1e-3),
@@ -130,13 +131,23 @@ def scene_from_dict(data: dict) -> Scene:
     p = data["pair"]
     _unknown("pair", p, _PAIR_KEYS)
     family = p.get("family", "involute")
-    if family not in ("involute", "curvilinear"):
-        raise _fail("pair.family", f"must be 'involute' or 'curvilinear'; got {family!r}")
-    only = {"involute": ("helix_angle_deg", "hand"), "curvilinear": ("tooth_trace_radius",)}
+    families = ("involute", "curvilinear", "double_circular_arc")
+    if family not in families:
+        raise _fail("pair.family", f"must be one of {', '.join(repr(f) for f in families)}; got {family!r}")
+    only = {
+        "involute": ("hand",), "curvilinear": ("tooth_trace_radius",), "double_circular_arc": ("axial_pitch_error_um",),
+    }
     for other, keys in only.items():
         for key in keys:
             if other != family and key in p:
                 raise _fail(f"pair.{key}", f"applies to family = '{other}' only")
+    if family == "curvilinear" and "helix_angle_deg" in p:
+        raise _fail("pair.helix_angle_deg", "applies to the involute and double_circular_arc families only")
+    if family == "double_circular_arc":
+        for key in ("pressure_angle_deg", "profile_shift", "center_distance", "addendum_coefficient",
+                    "dedendum_coefficient", "root_radius_coefficient"):
+            if key in p:
+                raise _fail(f"pair.{key}", "is fixed by the GB/T 12759 rack for family = 'double_circular_arc'")
     for required in ("teeth", "normal_module"):
         if required not in p:
             raise _fail(f"pair.{required}", "missing required field")
@@ -152,7 +163,11 @@ def scene_from_dict(data: dict) -> Scene:
             kwargs[key] = _numbers("pair", key, p[key], 2) if isinstance(p[key], list) else _number("pair", key, p[key])
     if "hand" in p:
         kwargs["hand"] = p["hand"]
-    if family == "curvilinear":
+    if family == "double_circular_arc":
+        if "axial_pitch_error_um" in p:
+            kwargs["axial_pitch_error"] = _number("pair", "axial_pitch_error_um", p["axial_pitch_error_um"]) * 1e-3
+        pair = _build("pair", DoubleArcGearPair, **kwargs)
+    elif family == "curvilinear":
         kwargs["module"] = kwargs.pop("normal_module")
         if "tooth_trace_radius" in p:
             kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])

@@ -62,3 +62,133 @@ def test_force_grows_as_the_square_root_of_stiffness_over_points():
 def test_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+# ---------------------------------------------------------------- rack, surfaces, four states
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from gearjax.geometry.depth import FlankDepth
+from gearjax.geometry.double_arc import DoubleArcGearPair
+from gearjax.impact.double_arc import SEED_VELOCITIES, four_state_impact
+from gearjax.tca._slice import make_problem, solve_slice
+
+SEED_PAIR = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
+
+
+def test_recalled_rack_values_satisfy_the_exact_relations():
+    residuals = GBT12759Rack().relation_residuals()
+    assert len(residuals) == 6
+    for name, value in residuals.items():
+        assert abs(value) < 1.5e-4, name
+    # a wrong recalled value would show: rho_f = 1.42 breaks x_f and l_f by ~4e-3
+    bad = GBT12759Rack(concave_radius=1.42).relation_residuals()
+    assert abs(bad["x_f = rho_f sin(alpha) - h_k"]) > 3e-3
+
+
+@pytest.mark.parametrize("zone", [0, 1])
+def test_working_arcs_meet_at_the_contact_instant(zone):
+    """Pinion and gear contact points of each zone coincide, with opposite normals, at the
+    zone's contact instant (to the rounding of the recalled rack, 5e-5 m_n)."""
+    pair = SEED_PAIR.contact_zones()[zone]
+    a0 = pair.contact_instant()
+    u1, u2 = pair.contact_guess(a0)
+    lead_free_z = 0.0
+    x1 = pair.flank_point(0, u1, lead_free_z, a0)
+    x2 = pair.flank_point(1, u2, lead_free_z, a0 * 24 / 24)
+    assert float(jnp.linalg.norm(x1 - x2)) < 1e-3
+    n1 = jnp.asarray(jax.numpy.array(pair.profile_normal(0, u1)))
+    n2 = pair.profile_normal(1, u2)
+    # normals in the fixed frame: pinion turned by a0, gear by -a0 (its own sense)
+    from gearjax._numerics import rotate2
+
+    assert float(jnp.dot(rotate2(a0, n1), rotate2(-a0, n2))) == pytest.approx(-1.0, abs=1e-9)
+    # the generated contact point: (R +- h_k, -/+ h_k cos(beta) cot(alpha)) in the generation
+    # frame, i.e. r^2 = (R +- h_k)^2 + (h_k cos(beta) cot(alpha))^2
+    r = float(jnp.linalg.norm(x1[:2]))
+    hk = GBT12759Rack().contact_height * 4.0
+    R = float(SEED_PAIR.pitch_radius[0])
+    lateral = hk * math.cos(math.radians(15.0)) / math.tan(math.radians(24.0))
+    expected = math.hypot(R + (hk if zone == 0 else -hk), lateral)
+    assert r == pytest.approx(expected, abs=1e-3)
+
+
+def test_zones_lie_q_TA_apart_along_the_face():
+    """The concave zone's contact instant, turned into an axial shift by the lead, is
+    formula (27)'s q_TA (or -q'_TA) to the accuracy of the transverse generation."""
+    a0 = float(SEED_PAIR.contact_zones()[1].contact_instant())
+    shift = -a0 * float(SEED_PAIR.pitch_radius[0]) / math.tan(math.radians(15.0))
+    facts = axial_meshing(4.0, 15.0, 55.0)
+    assert shift == pytest.approx(float(facts.convex_to_concave), abs=0.1)
+
+
+def test_slice_contact_of_the_convex_zone():
+    pair = SEED_PAIR.contact_zones()[0]
+    solver = optx.Newton(rtol=1e-10, atol=1e-12)
+    at = solve_slice(make_problem(pair, FlankDepth(), 0, 0.0, 0.0), solver, 40)
+    assert bool(at.valid) and int(at.kind) == 0
+    assert abs(float(at.offset)) < 2e-5  # interference of the recalled rack's rounding
+    for angle in (-0.02, 0.02):
+        off = solve_slice(make_problem(pair, FlankDepth(), 0, 0.0, angle), solver, 40)
+        assert float(off.offset) < float(at.offset) - 1e-4  # the slice separates away from the instant
+
+
+def test_four_states_reproduce_the_seed_velocities():
+    result = four_state_impact(SEED_PAIR, 0.1, 200.0)
+    # 81.57 is reproduced to 5e-4 (h_jf = 0.19997 from the recalled delta_2, not 0.2)
+    for ours, paper in zip(np.asarray(result.velocity), SEED_VELOCITIES):
+        assert ours == pytest.approx(paper, rel=1e-3)
+    # one batched function: a subset of states gives the same numbers
+    sub = four_state_impact(SEED_PAIR, 0.1, 200.0, states=(3, 0))
+    assert np.asarray(sub.velocity) == pytest.approx(np.asarray(result.velocity)[[3, 0]], rel=1e-12)
+    # formula (26)'s cos(24 deg) is not the exact distance for state 3
+    assert float(result.exact_radius[3]) > float(result.radius[3]) * 1.02
+
+
+def test_four_states_gradient_matches_finite_differences():
+    def total(delta):
+        return jnp.sum(four_state_impact(SEED_PAIR, delta, 200.0).velocity * jnp.arange(1.0, 5.0))
+
+    grad = float(jax.grad(total)(0.1))
+    h = 1e-6
+    fd = (float(total(0.1 + h)) - float(total(0.1 - h))) / (2 * h)
+    assert grad == pytest.approx(fd, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(face_width=40.0), "face_width"),
+        (dict(teeth=(8, 24)), "teeth"),
+        (dict(helix_angle_deg=2.0), "helix_angle_deg"),
+        (dict(axial_pitch_error=5.0), "axial_pitch_error"),
+        (dict(normal_module=float("nan")), "normal_module"),
+        (dict(zone=2), "zone"),
+    ],
+)
+def test_bad_double_arc_input(kwargs, match):
+    args = dict(teeth=(24, 24), normal_module=4.0, helix_angle_deg=15.0, face_width=55.0)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        DoubleArcGearPair(**args)
+    with pytest.raises(ValueError, match="pitch_circle_error"):
+        four_state_impact(SEED_PAIR, -0.1, 200.0)
+
+
+def test_double_arc_scene_file_and_no_loaded_stages():
+    from gearjax.scene import OperatingPoint, Scene
+    from gearjax.scene_file import SceneFileError, scene_from_dict
+
+    data = {"pair": {"family": "double_circular_arc", "teeth": [24, 24], "normal_module": 4.0,
+                     "helix_angle_deg": 15.0, "face_width": 55.0, "axial_pitch_error_um": -50.0}}
+    scene = scene_from_dict(data)
+    assert isinstance(scene.pair, DoubleArcGearPair)
+    assert float(scene.pair.axial_pitch_error) == pytest.approx(-0.05)
+    assert scene.pairs == (-2, -1, 0, 1, 2, 3)  # union of the two zones' windows
+    bad = {"pair": dict(data["pair"], pressure_angle_deg=20.0)}
+    with pytest.raises((SceneFileError, ValueError), match="pressure_angle_deg"):
+        scene_from_dict(bad)
+    with pytest.raises(ValueError, match="not available"):
+        Scene(SEED_PAIR, operating=OperatingPoint(torque=100.0))

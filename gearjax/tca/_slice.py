@@ -137,6 +137,10 @@ def relevance(problem: SliceProblem):
     g1, g2 = pair.contact_guess(problem.pinion_rotation)
     m1, m2 = 0.25 * (hi1 - lo1), 0.25 * (hi2 - lo2)
     flank = (g1 > lo1 - m1) & (g1 < hi1 + m1) & (g2 > lo2 - m2) & (g2 < hi2 + m2)
+    if not getattr(pair, "screen_edges", True):
+        # Non-conjugate families (double circular arc): the guess does not follow the
+        # contact, so the edges are analysed wherever the flank is.
+        return jnp.stack([flank, flank, flank])
     gear_edge = (g2 > hi2 - m2) & (g2 < hi2 + 2 * m2)
     pinion_edge = (g1 > hi1 - m1) & (g1 < hi1 + 2 * m1)
     return jnp.stack([flank, gear_edge, pinion_edge])

@@ -51,6 +51,8 @@ class TCAResult(eqx.Module):
         pinion_angle: $\\varphi_1$ (rad), shape (pos,).
         transmission_error: angular TE of gear 2, $\\varphi_2 - \\varphi_1 z_1/z_2$ (rad).
         pair_index: tooth pairs $k$ of the window (pair $k$ meshes $k$ pitches after pair 0).
+        pair_zone: contact zone of each entry of the pair axis (0 for single-zone
+            families; double circular arc: 0 convex, 1 concave driving tooth).
         slice_z: axial slice positions (mm): the midpoints, then the face ends $\\mp b/2$.
         slice_width: face width represented by each slice (mm; 0 for the face ends).
         slice_te: TE at which each slice would touch (rad); meaningful where `valid`.
@@ -72,6 +74,7 @@ class TCAResult(eqx.Module):
     pinion_angle: Float[Array, " pos"]
     transmission_error: Float[Array, " pos"]
     pair_index: Int[Array, " pair"]
+    pair_zone: Int[Array, " pair"]
     slice_z: Float[Array, " slice"]
     slice_width: Float[Array, " slice"]
     slice_te: Float[Array, "pos pair slice"]
@@ -143,6 +146,10 @@ def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tu
     position of the cycle and some slice, widened by `margin` pairs on each side for the
     edge contacts of approaching and receding teeth.
     """
+    zones = getattr(pair, "contact_zones", None)
+    if zones is not None and getattr(pair, "zone", 0) is None:
+        window = sorted(set().union(*(pair_window(p, pitches, margin) for p in zones())))
+        return tuple(range(window[0], window[-1] + 1))
     grid = np.linspace(-math.pi, math.pi, 8001)
     u1, u2 = jax.vmap(pair.contact_guess)(as_float(grid))
     lo1, hi1 = pair.profile_limits(0)
@@ -188,6 +195,15 @@ def tooth_contact_analysis(
     Returns:
         `TCAResult`.
     """
+    zones = getattr(pair, "contact_zones", None)
+    if zones is not None and getattr(pair, "zone", 0) is None:
+        # Families with several contact zones per tooth (double circular arc: convex and
+        # concave driving tooth): one analysis per zone, merged along the pair axis.
+        results = [
+            tooth_contact_analysis(p, depth, accuracy=accuracy, pairs=pairs, pitches=pitches, pinion_angles=pinion_angles)
+            for p in zones()
+        ]
+        return merge_zones(results)
     depth = FlankDepth() if depth is None else depth
     if pinion_angles is not None:
         phi = as_float(pinion_angles)
@@ -220,6 +236,33 @@ def tooth_contact_analysis(
     contact = jax.vmap(jax.vmap(jax.vmap(one, (None, None, 0)), (None, 0, None)), (0, None, None))(phi, ks, z)
     return _assemble(
         pair, depth, phi, ks, z, width, contact, accuracy.face_slices, accuracy.tca_method == "surface"
+    )
+
+
+def merge_zones(results: list[TCAResult]) -> TCAResult:
+    """One result from per-zone analyses: the pair axis holds zone 0's pairs, then zone
+    1's (`pair_zone` tells them apart); TE is the largest of the zones' and every
+    separation is re-measured from it."""
+    te = jnp.max(jnp.stack([r.transmission_error for r in results]), axis=0)
+    cat = lambda name, axis: jnp.concatenate([getattr(r, name) for r in results], axis=axis)  # noqa: E731
+    slice_te = cat("slice_te", -2)
+    valid = cat("valid", -2)
+    frac = cat("transverse_normal_fraction", -2)
+    radius = results[0].action_radius
+    gap = (te[..., :, None, None] - jnp.where(valid, slice_te, 0.0)) * radius * frac
+    fields = {name: cat(name, -2) for name in ("slice_te", "valid", "kind", "pinion_parameter", "gear_parameter", "unconverged")}
+    fields.update({name: cat(name, -3) for name in ("pinion_point", "gear_point", "normal", "relative_velocity")})
+    return TCAResult(
+        pinion_angle=results[0].pinion_angle,
+        transmission_error=te,
+        pair_index=cat("pair_index", -1),
+        pair_zone=jnp.concatenate([jnp.full(r.pair_index.shape, i) for i, r in enumerate(results)]),
+        slice_z=results[0].slice_z,
+        slice_width=results[0].slice_width,
+        separation=jnp.where(valid, gap, jnp.inf),
+        transverse_normal_fraction=frac,
+        action_radius=radius,
+        **fields,
     )
 
 
@@ -401,6 +444,7 @@ def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int,
         pinion_angle=phi,
         transmission_error=te,
         pair_index=ks,
+        pair_zone=jnp.zeros(ks.shape, dtype=ks.dtype),
         slice_z=z,
         slice_width=width,
         slice_te=slice_te,
