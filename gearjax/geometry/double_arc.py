@@ -63,7 +63,6 @@ import math
 from typing import ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -461,11 +460,6 @@ class DoubleArcGearPair(AbstractGearPair):
             point, _ = generated_point(tuple(c), radius * m, jnp.asarray(theta), self.pitch_radius[gear], self.helix_angle)
             out.append(np.asarray(point))
         return np.concatenate(out)
-
-
-def _turn(d, d0):
-    """Signed angle from `d0` to `d` (rad)."""
-    return jnp.arctan2(d0[0] * d[1] - d0[1] * d[0], d0[0] * d[0] + d0[1] * d[1])
 
 
 class AxialMeshing(eqx.Module):
