@@ -24,49 +24,12 @@ def _list(x, scale=1.0) -> list[float]:
 
 
 def geometry_dict(scene: Scene) -> dict:
+    """The pair's `geometry_report()` as plain numbers (lists per gear)."""
     pair = scene.pair
-    deg = 180.0 / math.pi
-    out = {
-        "family": type(pair).__name__,
-        "teeth": list(pair.teeth),
-        "center_distance_mm": _f(pair.center_distance),
-    }
-    if hasattr(pair, "working_pressure_angle"):
-        out.update(
-            {
-                "normal_module_mm": _f(pair.normal_module),
-                "helix_angle_deg": _f(pair.helix_angle) * deg,
-                "face_width_mm": _f(pair.face_width),
-                "transverse_pressure_angle_deg": _f(pair.transverse_pressure_angle) * deg,
-                "working_pressure_angle_deg": _f(pair.working_pressure_angle) * deg,
-                "base_helix_angle_deg": _f(pair.base_helix_angle) * deg,
-                "reference_radius_mm": _list(pair.reference_radius),
-                "base_radius_mm": _list(pair.base_radius),
-                "tip_radius_mm": _list(pair.tip_radius),
-                "root_radius_mm": _list(pair.root_radius),
-                "transverse_base_pitch_mm": _f(pair.transverse_base_pitch),
-                "normal_base_pitch_mm": _f(pair.normal_base_pitch),
-                "transverse_contact_ratio": _f(pair.transverse_contact_ratio),
-                "overlap_ratio": _f(pair.overlap_ratio),
-                "total_contact_ratio": _f(pair.total_contact_ratio),
-                "start_of_active_profile_roll_mm": _list(pair.start_of_active_profile),
-                "tip_roll_length_mm": _list(pair.tip_roll_length),
-            }
-        )
-    if hasattr(pair, "axial_pitch_error"):
-        out.update(
-            {
-                "normal_module_mm": _f(pair.normal_module),
-                "helix_angle_deg": _f(pair.helix_angle) * deg,
-                "face_width_mm": _f(pair.face_width),
-                "pitch_radius_mm": _list(pair.pitch_radius),
-                "axial_pitch_mm": _f(pair.axial_pitch),
-                "axial_pitch_error_um": _f(pair.axial_pitch_error) * UM_PER_MM,
-            }
-        )
-    if hasattr(pair, "tooth_trace_radius"):
-        out["tooth_trace_radius_mm"] = _f(pair.tooth_trace_radius)
-        out["contact_line_length_mm"] = _f(pair.contact_line_length)
+    out = {"family": type(pair).__name__, "teeth": list(pair.teeth)}
+    for key, value in pair.geometry_report().items():
+        array = np.asarray(value)
+        out[key] = float(array) if array.ndim == 0 else _list(array)
     return out
 
 
@@ -172,7 +135,7 @@ def summary(out: dict) -> str:
     """Readable multi-line summary of `result_dict` output."""
     g, t = out["geometry"], out["tca"]
     lines = [f"gearjax — {g['family']} pair z = {g['teeth'][0]}/{g['teeth'][1]}"]
-    if "normal_module_mm" in g:
+    if "working_pressure_angle_deg" in g:
         lines += [
             f"  m_n {g['normal_module_mm']:.4g} mm, beta {g['helix_angle_deg']:.4g} deg, b {g['face_width_mm']:.4g} mm",
             f"  centre distance      a        = {g['center_distance_mm']:.3f} mm",

@@ -27,17 +27,15 @@ from ._custom_types import ArrayLike, Scalar
 from ._numerics import as_float
 from ._validate import check_range, is_concrete
 from .accuracy import Accuracy
-from .geometry._base import AbstractGearPair
+from .geometry._base import EFFECTS, AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
 from .impact import ImpactResult, impact_analysis
-from .ltca import IsoCompliance, LTCAResult, SliceCompliance, loaded_contact_analysis
+from .ltca import AbstractCompliance, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .units import Material, newton_metre_to_newton_mm, rpm_to_rad_per_s
 
-#: Effects a scene may ask for beyond the always-present geometry and TCA.
-EFFECTS = ("ltca", "impact")
 
 
 class OperatingPoint(eqx.Module):
@@ -79,8 +77,8 @@ class Scene(eqx.Module):
         errors: mesh errors, or None.
         operating: torque and speed.
         material: both gears' material.
-        compliance: LTCA compliance model (`SliceCompliance()` by default, or
-            `IsoCompliance()`).
+        compliance: LTCA compliance model, any `AbstractCompliance` (`SliceCompliance()`
+            by default, or `IsoCompliance()`).
         hub_radius: inner radius of each gear body (mm), shape (2,); it enters the fillet
             foundation ($h_f = r_f/r_\\text{hub}$) and the gear inertias. Default half the
             root radius.
@@ -102,7 +100,7 @@ class Scene(eqx.Module):
     errors: MeshErrors | None
     operating: OperatingPoint
     material: Material
-    compliance: IsoCompliance | SliceCompliance
+    compliance: AbstractCompliance
     hub_radius: jax.Array
     inertia: jax.Array | None
     effects: frozenset = eqx.field(static=True)
@@ -120,7 +118,7 @@ class Scene(eqx.Module):
         errors: MeshErrors | None = None,
         operating: OperatingPoint | None = None,
         material: Material | None = None,
-        compliance: IsoCompliance | SliceCompliance | None = None,
+        compliance: AbstractCompliance | None = None,
         hub_radius: ArrayLike | None = None,
         inertia: ArrayLike | None = None,
         effects: tuple[str, ...] | frozenset = (),
@@ -142,11 +140,12 @@ class Scene(eqx.Module):
             raise ValueError("effects 'ltca' needs a torque: give operating=OperatingPoint(torque=...)")
         if "impact" in effects and operating.torque is None:
             raise ValueError("effects 'impact' needs a torque: give operating=OperatingPoint(torque=...)")
-        if getattr(pair, "contact_zones", None) is not None and effects:
+        unsupported = effects - pair.supported_effects
+        if unsupported:
             raise ValueError(
-                f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}: loaded "
-                "contact of point-contact gears is not implemented; use the rigid TCA (no torque) and "
-                "gearjax.impact.double_arc for the seed's four-state impact model"
+                f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}, "
+                f"which supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
+                + (f": {pair.effects_note}" if pair.effects_note else "")
             )
         if isinstance(accuracy, str):
             accuracy = Accuracy.preset(accuracy)
@@ -166,8 +165,16 @@ class Scene(eqx.Module):
         self.operating = operating
         self.material = Material() if material is None else material
         self.compliance = SliceCompliance() if compliance is None else compliance
-        if not isinstance(self.compliance, (IsoCompliance, SliceCompliance)):
-            raise ValueError(f"compliance must be IsoCompliance() or SliceCompliance(); got {type(compliance).__name__}")
+        if not isinstance(self.compliance, AbstractCompliance):
+            raise ValueError(
+                "compliance must be a compliance model (an AbstractCompliance, e.g. IsoCompliance() or "
+                f"SliceCompliance()); got {type(compliance).__name__}"
+            )
+        if "ltca" in effects and not isinstance(pair, self.compliance.families):
+            raise ValueError(
+                f"compliance {type(self.compliance).__name__} models the teeth of "
+                f"{', '.join(f.__name__ for f in self.compliance.families)} only; got {type(pair).__name__}"
+            )
         if hub_radius is None:
             hub_radius = 0.5 * pair.root_radius
         else:
@@ -220,9 +227,10 @@ def stack_scenes(scenes: list[Scene]) -> Scene:
 
 
 def _check_modification_fits(pair, modification, gear, name):
-    start, tip = pair.relief_coordinates(gear)
-    if is_concrete(start, tip, pair.face_width):
-        modification.check_fits(np.asarray(tip) - np.asarray(start), pair.face_width, name)
+    for zone in pair.contact_zones():
+        start, tip = zone.relief_coordinates(gear)
+        if is_concrete(start, tip, zone.face_width):
+            modification.check_fits(np.asarray(tip) - np.asarray(start), zone.face_width, name)
 
 
 class SimulationResult(eqx.Module):

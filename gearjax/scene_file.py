@@ -168,7 +168,6 @@ def scene_from_dict(data: dict) -> Scene:
             kwargs["axial_pitch_error"] = _number("pair", "axial_pitch_error_um", p["axial_pitch_error_um"]) * 1e-3
         pair = _build("pair", DoubleArcGearPair, **kwargs)
     elif family == "curvilinear":
-        kwargs["module"] = kwargs.pop("normal_module")
         if "tooth_trace_radius" in p:
             kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])
         pair = _build("pair", CurvilinearGearPair, **kwargs)

@@ -164,7 +164,6 @@ def test_four_states_gradient_matches_finite_differences():
         (dict(helix_angle_deg=2.0), "helix_angle_deg"),
         (dict(axial_pitch_error=5.0), "axial_pitch_error"),
         (dict(normal_module=float("nan")), "normal_module"),
-        (dict(zone=2), "zone"),
     ],
 )
 def test_bad_double_arc_input(kwargs, match):

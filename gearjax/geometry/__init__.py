@@ -1,5 +1,8 @@
 """Tooth families (one module each) and flank modifications."""
 
-from ._base import AbstractGearPair as AbstractGearPair
-from .involute import InvoluteGearPair as InvoluteGearPair
+from ._base import AbstractFlankPair as AbstractFlankPair, AbstractGearPair as AbstractGearPair
 from .curvilinear import CurvilinearGearPair as CurvilinearGearPair
+from .double_arc import DoubleArcGearPair as DoubleArcGearPair, DoubleArcZone as DoubleArcZone
+from .double_arc_rack import GBT12759Rack as GBT12759Rack
+from .involute import InvoluteGearPair as InvoluteGearPair
+from .involute_section import AbstractInvolutePair as AbstractInvolutePair

@@ -23,29 +23,166 @@ A family provides, for gear $i \in \{0, 1\}$:
 
 Everything else (3-D surface $r(u, z)$, unit normals, tip and face-end edges, modified
 flanks) is derived here, so the contact analysis needs nothing family-specific.
+
+Two levels, both declared here:
+
+* `AbstractGearPair`: what a user holds and a `Scene` takes. It declares the stages the
+  family supports (`supported_effects`) and its contact zones (`contact_zones()`): one
+  surface pair per zone of simultaneous contact, `(self,)` for single-zone families.
+* `AbstractFlankPair`: one zone's pair of drive flanks, the interface above, on which the
+  TCA works. It declares how the TCA may treat it: `conjugate_slices` (plane-of-action
+  fast path), `screen_edges` (edge candidates screened by the conjugate contact) and
+  `linear_lead` (peak refinement of edge candidates between slices).
+
+A family that leaves any of these undeclared cannot be instantiated (equinox names the
+missing attributes), so nothing downstream probes a pair with `getattr`/`hasattr`.
+
+**Derived geometry resolved once.** Quantities that depend on the pair only (working
+pressure angle — an inverse-involute Newton solve —, centre distance, radii, placements)
+are `derived` properties. `pair.resolve()` evaluates them once and returns a pair that
+carries their values (field `derived`); every stage resolves its pair on entry, so the
+residuals of the contact solves read constants instead of re-tracing their formulas (as
+lineax's `init`/`compute` split does). Gradients flow through `resolve()` like through
+any other computation. Edit an unresolved pair (e.g. with `eqx.tree_at`): a resolved pair
+keeps the values it was resolved with.
 """
 
-from __future__ import annotations
-
 import abc
+import functools
+from typing import ClassVar
 
 import equinox as eqx
+from equinox import AbstractClassVar, AbstractVar
 import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float, perp2, rotate2, safe_divide, safe_norm
 
+#: Stages beyond the rigid TCA that a family may support.
+EFFECTS = ("ltca", "impact")
+
+
+def derived(method):
+    """A property of a gear pair that depends on its parameters only.
+
+    Evaluated from the formula on an unresolved pair; read from `pair.derived` on a pair
+    returned by `resolve()`.
+    """
+    name = method.__name__
+
+    @functools.wraps(method)
+    def getter(self):
+        cache = self.derived
+        if cache is not None and name in cache:
+            return cache[name]
+        return method(self)
+
+    getter.is_derived = True
+    return property(getter)
+
+
+def _derived_names(cls) -> tuple[str, ...]:
+    names = []
+    for klass in reversed(cls.__mro__):
+        for name, value in vars(klass).items():
+            if isinstance(value, property) and getattr(value.fget, "is_derived", False) and name not in names:
+                names.append(name)
+    return tuple(names)
+
 
 class AbstractGearPair(eqx.Module):
-    """A gear pair of one tooth family: geometry of both drive flanks and their placement.
+    """A gear pair of one tooth family, as a `Scene` holds it.
 
     Concrete families are final classes; they hold their parameters as array fields (so a
     pair can be differentiated and batched with `vmap`) and tooth counts as static fields.
+
+    Declared capabilities (class variables every family sets):
+        supported_effects: the stages beyond the rigid TCA it supports, a subset of
+            `EFFECTS` = ("ltca", "impact"); `Scene` refuses the others.
+        effects_note: what to use instead of an unsupported stage (for the error message).
     """
 
-    teeth: eqx.AbstractVar[tuple[int, int]]
-    face_width: eqx.AbstractVar[Array]
+    teeth: AbstractVar[tuple[int, int]]
+    face_width: AbstractVar[Array]
+    derived: AbstractVar[dict[str, Array] | None]
+
+    supported_effects: AbstractClassVar[frozenset[str]]
+    effects_note: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
+        """The pair's zones of simultaneous contact, one flank pair each, in the order of
+        `TCAResult.pair_zone`; `(self,)` for single-zone families."""
+
+    @property
+    @abc.abstractmethod
+    def center_distance(self) -> Scalar:
+        """Operating centre distance $a$ (mm)."""
+
+    @property
+    @abc.abstractmethod
+    def root_radius(self) -> Float[Array, "2"]:
+        """Root radius $r_f$ of each gear (mm), shape (..., 2)."""
+
+    @abc.abstractmethod
+    def action_radius(self, gear: int) -> Scalar:
+        """Radius (mm) converting an angular transmission error of `gear` into a
+        displacement along the line of action (the base radius of an involute gear)."""
+
+    @abc.abstractmethod
+    def geometry_report(self) -> dict[str, ArrayLike]:
+        """Named geometry quantities for reports: keys carry their unit as a suffix
+        (`_mm`, `_deg`, `_um`; none for ratios), values are arrays (per gear: shape 2)."""
+
+    # ------------------------------------------------------------------ derived geometry
+    def resolve(self):
+        """This pair with every `derived` quantity evaluated once (see the module
+        docstring); a resolved pair is returned as it is."""
+        if self.derived is not None:
+            return self
+        resolved = eqx.tree_at(lambda p: p.derived, self, {}, is_leaf=lambda x: x is None)
+        for name in _derived_names(type(self)):
+            # Each quantity is evaluated on the partly resolved pair, so it reuses the
+            # ones before it (the working pressure angle is solved once).
+            value = getattr(resolved, name)
+            resolved = eqx.tree_at(lambda p: p.derived, resolved, {**resolved.derived, name: value})
+        return resolved
+
+    @property
+    def gear_ratio(self) -> float:
+        """$u = z_2 / z_1$."""
+        return self.teeth[1] / self.teeth[0]
+
+    def angular_pitch(self, gear: int) -> float:
+        """$2\\pi / z$ (rad)."""
+        return 2.0 * jnp.pi / self.teeth[gear]
+
+    def action_radii(self) -> Float[Array, "2"]:
+        """`action_radius` of both gears, shape (..., 2) (mm)."""
+        return jnp.stack([self.action_radius(0), self.action_radius(1)], -1)
+
+
+class AbstractFlankPair(AbstractGearPair):
+    """The drive flanks of one contact zone: the interface the TCA works on.
+
+    Declared capabilities (class variables every family sets):
+        conjugate_slices: each transverse slice is a conjugate pair (line contact on the
+            plane of action): the `plane_of_action` TCA applies.
+        screen_edges: `contact_guess` follows the contact, so tip-edge candidates are
+            solved only near the ends of the conjugate contact; otherwise wherever the
+            flank candidate is.
+        linear_lead: `lead_rotation` is linear in $z$, so the TCA's peak refinement
+            between slices also applies to edge candidates.
+    """
+
+    conjugate_slices: AbstractClassVar[bool]
+    screen_edges: AbstractClassVar[bool]
+    linear_lead: AbstractClassVar[bool]
+
+    def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
+        """A flank pair is its own single zone."""
+        return (self,)
 
     # ------------------------------------------------------------------ family interface
     @abc.abstractmethod
@@ -64,11 +201,6 @@ class AbstractGearPair(eqx.Module):
     def placement(self, gear: int) -> Scalar:
         """Angle (rad, counter-clockwise, local frame) of tooth 0's centre line."""
 
-    @property
-    @abc.abstractmethod
-    def center_distance(self) -> Scalar:
-        """Operating centre distance $a$ (mm)."""
-
     @abc.abstractmethod
     def contact_guess(self, angle: ArrayLike) -> tuple[Scalar, Scalar]:
         """Nominal flank contact $(u_1, u_2)$ of a slice whose pinion tooth is turned by
@@ -85,25 +217,11 @@ class AbstractGearPair(eqx.Module):
         gear axis (an approximation is enough: it only starts Newton solves)."""
 
     @abc.abstractmethod
-    def action_radius(self, gear: int) -> Scalar:
-        """Radius (mm) converting an angular transmission error of `gear` into a
-        displacement along the line of action (the base radius of an involute gear)."""
-
-    @abc.abstractmethod
     def relief_coordinates(self, gear: int) -> tuple[Scalar, Scalar]:
         """Profile coordinates where profile relief is referenced: the start of the active
         profile (mating tip circle) and the tip, $(u_\\text{start}, u_\\text{tip})$ (mm)."""
 
     # ------------------------------------------------------------------ derived geometry
-    @property
-    def gear_ratio(self) -> float:
-        """$u = z_2 / z_1$."""
-        return self.teeth[1] / self.teeth[0]
-
-    def angular_pitch(self, gear: int) -> float:
-        """$2\\pi / z$ (rad)."""
-        return 2.0 * jnp.pi / self.teeth[gear]
-
     def center(self, gear: int) -> Float[Array, "2"]:
         """Axis position of `gear` in the fixed frame (mm)."""
         a = self.center_distance

@@ -30,16 +30,19 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from .involute import InvoluteGearPair
+from .involute_section import AbstractInvolutePair
 
 
-class CurvilinearGearPair(InvoluteGearPair):
+class CurvilinearGearPair(AbstractInvolutePair):
     """External involute curvilinear-tooth (arc tooth trace) cylindrical gear pair.
 
-    >>> pair = CurvilinearGearPair((20, 30), module=2.0, pressure_angle_deg=20.0,
+    >>> pair = CurvilinearGearPair((20, 30), normal_module=2.0, pressure_angle_deg=20.0,
     ...                            face_width=20.0, tooth_trace_radius=12.0)
 
-    Attributes (besides those of `InvoluteGearPair`, with zero helix angle):
+    The sections are spur involutes: the module is the normal (= transverse) module, and
+    the helix angle is zero.
+
+    Attributes (besides those of `AbstractInvolutePair`):
         tooth_trace_radius: $R_t > b/2$, radius of the circular tooth trace (mm).
     """
 
@@ -51,7 +54,7 @@ class CurvilinearGearPair(InvoluteGearPair):
     def __init__(
         self,
         teeth: tuple[int, int],
-        module: ArrayLike,
+        normal_module: ArrayLike,
         pressure_angle_deg: ArrayLike = 20.0,
         face_width: ArrayLike = 20.0,
         tooth_trace_radius: ArrayLike = 12.0,
@@ -71,19 +74,19 @@ class CurvilinearGearPair(InvoluteGearPair):
                 f"tooth_trace_radius must be > b/2 = {float(jnp.max(0.5 * width)):.4f} mm (the arc "
                 f"tooth trace must span the face width); got {jnp.asarray(radius)} mm"
             )
-        self.tooth_trace_radius = radius
-        super().__init__(
+        self._init_section(
             teeth,
-            module,
+            normal_module,
             pressure_angle_deg,
             0.0,
             face_width,
             profile_shift,
-            center_distance,
-            addendum_coefficient=addendum_coefficient,
-            dedendum_coefficient=dedendum_coefficient,
-            root_radius_coefficient=root_radius_coefficient,
+            addendum_coefficient,
+            dedendum_coefficient,
+            root_radius_coefficient,
         )
+        self.tooth_trace_radius = radius
+        self._check_section(center_distance)
 
     def lead_displacement(self, z: ArrayLike) -> Scalar:
         """$d(z) = z^2/(R_t + \\sqrt{R_t^2 - z^2})$ (mm), along the base circles."""
@@ -101,6 +104,13 @@ class CurvilinearGearPair(InvoluteGearPair):
         r = self.tooth_trace_radius
         shape = jnp.broadcast_shapes(jnp.shape(u), jnp.shape(z))
         return jnp.broadcast_to(jnp.sqrt(r * r - z * z) / r, shape)
+
+    def geometry_report(self) -> dict[str, ArrayLike]:
+        return {
+            **super().geometry_report(),
+            "tooth_trace_radius_mm": self.tooth_trace_radius,
+            "contact_line_length_mm": self.contact_line_length,
+        }
 
     @property
     def contact_line_length(self) -> Scalar:

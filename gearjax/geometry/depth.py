@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import ArrayLike, Scalar
-from ._base import AbstractGearPair
+from ._base import AbstractFlankPair
 from .errors import MeshErrors
 from .modification import FlankModification
 
@@ -29,7 +29,7 @@ class FlankDepth(eqx.Module):
     errors: MeshErrors | None = None
 
     def __call__(
-        self, pair: AbstractGearPair, gear: int, pair_index: ArrayLike, u: ArrayLike, z: ArrayLike
+        self, pair: AbstractFlankPair, gear: int, pair_index: ArrayLike, u: ArrayLike, z: ArrayLike
     ) -> Scalar:
         """Depth (mm) on the flank of `gear` of tooth pair `pair_index` at profile parameter
         `u` (mm) and axial position `z` (mm)."""

@@ -1,32 +1,6 @@
 r"""Double-circular-arc helical gears, GB/T 12759-1991 (seeds 000 and 003).
 
-**Basic rack** (normal section, multiples of $m_n$; frame: $\xi$ along the pitch line, $\eta$
-towards the rack tooth tip, origin on the tooth centre line; the *left* flank $\xi < 0$ is
-listed, the right one is its mirror). Each tooth has a convex addendum arc, a transition arc,
-a concave dedendum arc and a root arc:
-
-| segment | centre | radius | range |
-|---|---|---|---|
-| convex | $O_a = (l_a, x_a)$ | $\rho_a$ | $O_a + \rho_a(-\cos t, \sin t)$, $t \in [\delta_1, t_\text{tip}]$ |
-| transition | $O_a + (\rho_a + r_j)(-\cos\delta_1, \sin\delta_1)$ | $r_j$ | $A_1 \to F_1$ |
-| concave | $O_f = (-\pi/2 - l_f, x_f)$ | $\rho_f$ | $O_f + \rho_f(\cos t, -\sin t)$, $t \in [\delta_2, t_G]$ |
-| root | $(-\pi/2, -h_f + r_g)$ | $r_g$ | $G \to$ space centre |
-
-The contact points are at $t = \alpha$ on both working arcs, $h_k = \rho_a\sin\alpha + x_a$
-above and $\rho_f\sin\alpha - x_f = h_k$ below the pitch line.
-
-Sources of the rack values (see `GBT12759Rack`): $\alpha$, $\rho_a$, $l_a$, $x_a$ ($e_a$), $j$
-and $h_k$ are quoted in seeds 000/003 and reproduce their formula (27) (tested). No copy of
-the standard's table was available offline; the concave-arc, transition and root values of
-the row $m_n$ > 3–6 mm are **recalled** from the table as reprinted in Chinese handbooks
-(机械设计手册, chapter 圆弧圆柱齿轮传动; Shao, *Double Circular Arc Gear*, 1994 = seed ref. [1])
-and checked two ways (tests/test_double_arc.py): (1) they satisfy the rack's exact
-relations to 1e-4 ($x_f = \rho_f\sin\alpha - h_k$, $l_f = l_a + (\rho_f - \rho_a)\cos\alpha -
-j/2$, the heights $h_{ja} = 0.16$, $h_{jf} = 0.20$ of $A_1$ and $F_1$, $r_j$ tangent to the
-convex arc at $A_1$ through $F_1$, $r_g$ tangent to the concave arc with its bottom at
-$-h_f$); (2) seed 000/003's own impact velocities for $m_n = 4$ imply $\rho_f = 1.41$,
-$h_{jf} = 0.20$ (`gearjax.impact.double_arc`). Check them against the standard before relying
-on other module rows.
+The basic rack and the sources of its values: `double_arc_rack.py`.
 
 **Tooth surfaces.** Both gears' teeth have the rack tooth's shape (convex addendum outside the
 pitch circle, concave dedendum inside); each is the envelope of the basic rack rolled on its
@@ -47,8 +21,8 @@ drive flank). $\xi_I$ is the pitch-point position on the rack when the point is 
 **Contact zones.** The driving pinion's convex addendum meshes with the gear's concave
 dedendum ("convex driving tooth", zone 0) and its concave dedendum with the gear's convex
 addendum ("concave driving tooth", zone 1), $q_{TA}$ apart along the face (formula 27).
-`DoubleArcGearPair.contact_zones()` gives one pair object per zone; the general TCA runs on
-each and merges them (`gearjax.tca.analysis`).
+`DoubleArcGearPair.contact_zones()` gives one `DoubleArcZone` flank pair per zone; the
+general TCA runs on each and merges them (`gearjax.tca.analysis`).
 
 **Axial pitch error** $\Delta_\alpha = t_1 - t_2$ (seed's section 2.1): the gear's lead is made
 with axial pitch $t_2 = P_x - \Delta_\alpha$ (pinion nominal), transverse profiles unchanged.
@@ -58,7 +32,6 @@ $\Delta = \Delta_\alpha\tan\beta$ on the pitch circle, the seed's formula (10).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import ClassVar
 
@@ -67,149 +40,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
-from .._numerics import as_float, rotate2
+from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from ._base import AbstractGearPair
+from ._base import AbstractFlankPair, AbstractGearPair, derived
+from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, generated_point
 
-CONVEX, CONCAVE = 0, 1
 ZONE_NAMES = ("convex driving tooth", "concave driving tooth")
-
-
-def _dms(degrees: int, minutes: int, seconds: int) -> float:
-    return degrees + minutes / 60.0 + seconds / 3600.0
-
-
-class GBT12759Rack(eqx.Module):
-    """GB/T 12759-1991 basic rack, multiples of $m_n$ (row $m_n$ > 3–6 mm).
-
-    Sources: `pressure_angle_deg`, `convex_radius`, `convex_centre_offset`,
-    `convex_centre_shift`, `backlash`: quoted in seeds 000/003 (they reproduce formula 27).
-    All others: recalled from the standard's table 1 as reprinted in handbooks, not checked
-    against a copy; verified only through the exact relations of the rack
-    (`relation_residuals`) and the seed's velocities (module docstring).
-    """
-
-    pressure_angle_deg: float = eqx.field(static=True, default=24.0)  # alpha (seed)
-    convex_radius: float = eqx.field(static=True, default=1.3)  # rho_a (seed)
-    convex_centre_offset: float = eqx.field(static=True, default=0.6289)  # l_a (seed)
-    convex_centre_shift: float = eqx.field(static=True, default=0.0163)  # x_a = e_a (seed)
-    backlash: float = eqx.field(static=True, default=0.06)  # j (seed)
-    concave_radius: float = eqx.field(static=True, default=1.41)  # rho_f (recalled; seed velocities)
-    concave_centre_offset: float = eqx.field(static=True, default=0.6994)  # l_f (recalled)
-    concave_centre_shift: float = eqx.field(static=True, default=0.0285)  # x_f = e_f (recalled)
-    addendum: float = eqx.field(static=True, default=0.9)  # h_a (recalled)
-    dedendum: float = eqx.field(static=True, default=1.1)  # h_f (recalled)
-    convex_process_angle_deg: float = eqx.field(static=True, default=_dms(6, 20, 52))  # delta_1 (recalled)
-    concave_process_angle_deg: float = eqx.field(static=True, default=_dms(9, 19, 30))  # delta_2 (recalled)
-    transition_radius: float = eqx.field(static=True, default=0.5043)  # r_j (recalled)
-    root_radius: float = eqx.field(static=True, default=0.4004)  # r_g (recalled)
-
-    @property
-    def alpha(self) -> float:
-        return math.radians(self.pressure_angle_deg)
-
-    @property
-    def contact_height(self) -> float:
-        """$h_k = \\rho_a\\sin\\alpha + e_a$ (multiples of $m_n$)."""
-        return self.convex_radius * math.sin(self.alpha) + self.convex_centre_shift
-
-    @property
-    def convex_centre(self) -> tuple[float, float]:
-        """$O_a = (l_a, x_a)$."""
-        return (self.convex_centre_offset, self.convex_centre_shift)
-
-    @property
-    def concave_centre(self) -> tuple[float, float]:
-        """$O_f = (-\\pi/2 - l_f, x_f)$."""
-        return (-0.5 * math.pi - self.concave_centre_offset, self.concave_centre_shift)
-
-    @property
-    def convex_junction_height(self) -> float:
-        """$h_{ja} = x_a + \\rho_a\\sin\\delta_1$: height of $A_1$ (convex/transition)."""
-        return self.convex_centre_shift + self.convex_radius * math.sin(math.radians(self.convex_process_angle_deg))
-
-    @property
-    def concave_junction_depth(self) -> float:
-        """$h_{jf} = \\rho_f\\sin\\delta_2 - x_f$: depth of $F_1$ (transition/concave), the
-        seed's "concave tooth connection point high"."""
-        return self.concave_radius * math.sin(math.radians(self.concave_process_angle_deg)) - self.concave_centre_shift
-
-    @property
-    def tip_angle(self) -> float:
-        """$t_\\text{tip}$ of the convex arc at the tip line $\\eta = h_a$ (rad)."""
-        return math.asin((self.addendum - self.convex_centre_shift) / self.convex_radius)
-
-    @property
-    def root_centre(self) -> tuple[float, float]:
-        return (-0.5 * math.pi, -self.dedendum + self.root_radius)
-
-    @property
-    def root_junction_angle(self) -> float:
-        """$t_G$ where the root arc touches the concave arc internally (rad)."""
-        cx, cy = self.concave_centre
-        gx, gy = self.root_centre
-        return math.atan2(-(gy - cy), gx - cx)
-
-    @property
-    def transition_centre(self) -> tuple[float, float]:
-        d1 = math.radians(self.convex_process_angle_deg)
-        r = self.convex_radius + self.transition_radius
-        return (self.convex_centre_offset - r * math.cos(d1), self.convex_centre_shift + r * math.sin(d1))
-
-    def relation_residuals(self) -> dict[str, float]:
-        """Residuals of the rack's exact relations (multiples of $m_n$); all ~1e-4 or less
-        when the recalled values are consistent."""
-        a = self.alpha
-        hk = self.contact_height
-        d2 = math.radians(self.concave_process_angle_deg)
-        cx, cy = self.concave_centre
-        f1 = (cx + self.concave_radius * math.cos(d2), cy - self.concave_radius * math.sin(d2))
-        tx, ty = self.transition_centre
-        gx, gy = self.root_centre
-        return {
-            "x_f = rho_f sin(alpha) - h_k": self.concave_centre_shift - (self.concave_radius * math.sin(a) - hk),
-            "l_f = l_a + (rho_f - rho_a) cos(alpha) - j/2": self.concave_centre_offset
-            - (self.convex_centre_offset + (self.concave_radius - self.convex_radius) * math.cos(a) - 0.5 * self.backlash),
-            "h_ja = 0.16": self.convex_junction_height - 0.16,
-            "h_jf = 0.20": self.concave_junction_depth - 0.20,
-            "r_j through F1": math.hypot(f1[0] - tx, f1[1] - ty) - self.transition_radius,
-            "r_g tangent to the concave arc": math.hypot(gx - cx, gy - cy) - (self.concave_radius - self.root_radius),
-        }
-
-    def flank(self, samples: int = 40) -> np.ndarray:
-        """Left flank of the normal-section rack from the tip to the space centre, (n, 2),
-        multiples of $m_n$ (for drawings)."""
-        a, c = self.convex_centre, self.concave_centre
-        d1 = math.radians(self.convex_process_angle_deg)
-        d2 = math.radians(self.concave_process_angle_deg)
-        t = np.linspace(self.tip_angle, d1, samples)
-        convex = np.stack([a[0] - self.convex_radius * np.cos(t), a[1] + self.convex_radius * np.sin(t)], -1)
-        tx, ty = self.transition_centre
-        f1 = np.array([c[0] + self.concave_radius * math.cos(d2), c[1] - self.concave_radius * math.sin(d2)])
-        start = math.atan2(convex[-1, 1] - ty, convex[-1, 0] - tx)
-        end = math.atan2(f1[1] - ty, f1[0] - tx)
-        s = np.linspace(start, end, samples)
-        transition = np.stack([tx + self.transition_radius * np.cos(s), ty + self.transition_radius * np.sin(s)], -1)
-        t = np.linspace(d2, self.root_junction_angle, samples)
-        concave = np.stack([c[0] + self.concave_radius * np.cos(t), c[1] - self.concave_radius * np.sin(t)], -1)
-        gx, gy = self.root_centre
-        s = np.linspace(math.atan2(concave[-1, 1] - gy, concave[-1, 0] - gx), -0.5 * math.pi, samples)
-        root = np.stack([gx + self.root_radius * np.cos(s), gy + self.root_radius * np.sin(s)], -1)
-        tip = np.array([[0.0, self.addendum]])
-        return np.concatenate([tip, convex, transition, concave, root])
-
-
-def generated_point(centre, radius, theta, pitch_radius, helix_angle) -> tuple[Array, Array]:
-    """Envelope of a rack arc (module docstring): the gear-frame point generated by the
-    rack point of polar angle `theta` (rad) on the arc of `centre` (mm, normal section) and
-    `radius` (mm), and the pitch-point position $\\xi_I$ (mm, transverse) on the rack."""
-    cb = jnp.cos(helix_angle)
-    cot = jnp.cos(theta) / jnp.sin(theta)
-    p_xi = (centre[0] + radius * jnp.cos(theta)) / cb
-    p_eta = centre[1] + radius * jnp.sin(theta)
-    xi_pitch = p_xi - p_eta * cb * cot
-    plane = jnp.stack([pitch_radius + p_eta, -p_eta * cb * cot], -1)
-    return rotate2(-xi_pitch / pitch_radius, plane), xi_pitch
 
 
 class DoubleArcGearPair(AbstractGearPair):
@@ -226,8 +62,9 @@ class DoubleArcGearPair(AbstractGearPair):
         axial_pitch_error: $\\Delta_\\alpha = t_1 - t_2$ (mm): the gear's axial pitch is
             $P_x - \\Delta_\\alpha$.
         rack: the basic rack (static).
-        zone: None for the whole pair, 0 (convex driving tooth) or 1 (concave driving
-            tooth) for one contact zone (static); the family interface needs a zone.
+        derived: values of the `derived` quantities once resolved, else None.
+
+    The flanks of each contact zone are `contact_zones()` (`DoubleArcZone`).
     """
 
     teeth: tuple[int, int] = eqx.field(static=True)
@@ -236,15 +73,14 @@ class DoubleArcGearPair(AbstractGearPair):
     face_width: Scalar
     axial_pitch_error: Scalar
     rack: GBT12759Rack = eqx.field(static=True)
-    zone: int | None = eqx.field(static=True)
+    derived: dict[str, Array] | None
 
-    #: Not conjugate: no plane-of-action fast path; edges are screened by the window only.
-    conjugate_slices: ClassVar[bool] = False
-    screen_edges: ClassVar[bool] = False
-    #: Half-width (rad of pinion rotation) of the window around the contact instant in
-    #: which a slice of a tooth pair is analysed (~0.1 rad holds every slice whose gap is
-    #: below ~1.5 mm of pitch-circle arc).
-    contact_window: ClassVar[float] = 0.1
+    #: Point contact: loaded contact is not implemented (rigid TCA only).
+    supported_effects: ClassVar[frozenset[str]] = frozenset()
+    effects_note: ClassVar[str] = (
+        "loaded contact of point-contact gears is not implemented; use the rigid TCA (no "
+        "torque) and gearjax.papers.double_arc for the seed's four-state impact model"
+    )
 
     def __init__(
         self,
@@ -255,7 +91,6 @@ class DoubleArcGearPair(AbstractGearPair):
         axial_pitch_error: ArrayLike = 0.0,
         *,
         rack: GBT12759Rack = GBT12759Rack(),
-        zone: int | None = None,
     ):
         if (
             not isinstance(teeth, tuple | list) or len(teeth) != 2
@@ -265,15 +100,13 @@ class DoubleArcGearPair(AbstractGearPair):
         check_range("normal_module", normal_module, 0.0, 100.0, low_inclusive=False, unit="mm")
         check_range("helix_angle_deg", helix_angle_deg, 5.0, 40.0, unit="deg")
         check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
-        if zone not in (None, CONVEX, CONCAVE):
-            raise ValueError(f"zone must be None, 0 (convex driving) or 1 (concave driving); got {zone!r}")
         self.teeth = (int(teeth[0]), int(teeth[1]))
         self.normal_module = as_float(normal_module)
         self.helix_angle = as_float(helix_angle_deg) * (math.pi / 180.0)
         self.face_width = as_float(face_width)
         self.axial_pitch_error = as_float(axial_pitch_error)
         self.rack = rack
-        self.zone = zone
+        self.derived = None
         if is_concrete(self.normal_module, self.helix_angle, self.face_width, self.axial_pitch_error):
             px = np.asarray(self.axial_pitch)
             if np.any(np.asarray(self.face_width) < px):
@@ -284,52 +117,50 @@ class DoubleArcGearPair(AbstractGearPair):
             check_range("axial_pitch_error", np.asarray(self.axial_pitch_error) / px, -0.05, 0.05, unit="x P_x")
 
     # ------------------------------------------------------------------ gear data
-    @property
+    @derived
     def pitch_radius(self) -> Float[Array, "2"]:
         """$R_i = m_nz_i/(2\\cos\\beta)$ (mm)."""
         z = jnp.asarray(self.teeth, dtype=self.normal_module.dtype)
         return (self.normal_module / (2.0 * jnp.cos(self.helix_angle)))[..., None] * z
 
-    @property
+    @derived
     def axial_pitch(self) -> Scalar:
         """$P_x = \\pi m_n/\\sin\\beta$ (mm)."""
         return math.pi * self.normal_module / jnp.sin(self.helix_angle)
 
-    @property
+    @derived
     def transverse_pressure_angle(self) -> Scalar:
         return jnp.arctan(math.tan(self.rack.alpha) / jnp.cos(self.helix_angle))
 
-    @property
+    @derived
     def center_distance(self) -> Scalar:
         r = self.pitch_radius
         return r[..., 0] + r[..., 1]
 
-    @property
+    @derived
     def tip_radius(self) -> Float[Array, "2"]:
         return self.pitch_radius + (self.rack.addendum * self.normal_module)[..., None]
 
-    @property
+    @derived
     def root_radius(self) -> Float[Array, "2"]:
         return self.pitch_radius - (self.rack.dedendum * self.normal_module)[..., None]
 
-    def contact_zones(self) -> tuple[DoubleArcGearPair, DoubleArcGearPair]:
-        """The two contact zones as single-zone pairs (convex driving, concave driving)."""
-        return tuple(self._with_zone(z) for z in (CONVEX, CONCAVE))
+    def contact_zones(self) -> tuple[DoubleArcZone, DoubleArcZone]:
+        """The two contact zones (convex driving, concave driving tooth)."""
+        return (DoubleArcZone(self, CONVEX), DoubleArcZone(self, CONCAVE))
 
-    def _with_zone(self, zone: int) -> DoubleArcGearPair:
-        new = object.__new__(type(self))
-        for field in dataclasses.fields(self):
-            object.__setattr__(new, field.name, getattr(self, field.name))
-        object.__setattr__(new, "zone", zone)
-        return new
+    def geometry_report(self) -> dict[str, ArrayLike]:
+        return {
+            "normal_module_mm": self.normal_module,
+            "helix_angle_deg": self.helix_angle * (180.0 / math.pi),
+            "face_width_mm": self.face_width,
+            "center_distance_mm": self.center_distance,
+            "pitch_radius_mm": self.pitch_radius,
+            "axial_pitch_mm": self.axial_pitch,
+            "axial_pitch_error_um": self.axial_pitch_error * 1e3,
+        }
 
     # ------------------------------------------------------------------ rack arcs
-    def _arc(self, gear: int) -> int:
-        """Working arc of `gear` in this zone: CONVEX or CONCAVE."""
-        if self.zone is None:
-            raise ValueError("this DoubleArcGearPair has zone=None: use pair.contact_zones() (the TCA does)")
-        return self.zone if gear == 0 else 1 - self.zone
-
     def _arc_data(self, arc: int):
         m = self.normal_module
         r = self.rack
@@ -360,22 +191,24 @@ class DoubleArcGearPair(AbstractGearPair):
         """$u$ of the rack contact point ($t = \\alpha$) on `arc` (mm)."""
         return self._u(arc, self.rack.alpha)
 
-    # ------------------------------------------------------------------ family interface
-    def profile(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
-        return self._generate(gear, self._arc(gear), u)[0]
-
-    def profile_limits(self, gear: int) -> tuple[Scalar, Scalar]:
-        """Convex arc: $t \\in [\\delta_1, t_\\text{tip}]$; concave arc: from the root junction
-        $G$ to $F_1$ (the edge with the transition arc)."""
+    def arc_limits(self, arc: int) -> tuple[Scalar, Scalar]:
+        """Working part of `arc` (mm of $u$): convex $t \\in [\\delta_1, t_\\text{tip}]$;
+        concave from the root junction $G$ to $F_1$ (the edge with the transition arc)."""
         r = self.rack
-        if self._arc(gear) == CONVEX:
+        if arc == CONVEX:
             return self._u(CONVEX, math.radians(r.convex_process_angle_deg)), self._u(CONVEX, r.tip_angle)
         return self._u(CONCAVE, r.root_junction_angle), self._u(CONCAVE, math.radians(r.concave_process_angle_deg))
 
-    def parameter_domain(self, gear: int) -> tuple[Scalar, Scalar]:
-        """$t \\in [0.03, 1.3]$ rad on the working arc (its smooth continuation)."""
-        lo, hi = self._u(self._arc(gear), 0.03), self._u(self._arc(gear), 1.3)
-        return (lo, hi) if self._arc(gear) == CONVEX else (hi, lo)
+    def arc_domain(self, arc: int) -> tuple[Scalar, Scalar]:
+        """$t \\in [0.03, 1.3]$ rad on `arc` (its smooth continuation), as a range of $u$ (mm)."""
+        lo, hi = self._u(arc, 0.03), self._u(arc, 1.3)
+        return (lo, hi) if arc == CONVEX else (hi, lo)
+
+    def pitch_point(self, arc: int) -> Scalar:
+        """$\\xi_I$ (mm) at the rack contact point of `arc`."""
+        centre, radius = self._arc_data(arc)
+        theta = self._theta(arc, self.contact_parameter(arc))
+        return generated_point(centre, radius, theta, 1.0, self.helix_angle)[1]
 
     def lead_rotation(self, gear: int, z: ArrayLike) -> Scalar:
         """$\\psi_1 = z\\tan\\beta/R_1$, $\\psi_2 = 2\\pi z/(z_2 t_2)$ with $t_2 = P_x - \\Delta_\\alpha$."""
@@ -384,60 +217,18 @@ class DoubleArcGearPair(AbstractGearPair):
             return z * jnp.tan(self.helix_angle) / self.pitch_radius[..., 0]
         return 2.0 * jnp.pi * z / (self.teeth[1] * (self.axial_pitch - self.axial_pitch_error))
 
-    def _pitch_point(self, arc: int) -> Scalar:
-        """$\\xi_I$ (mm) at the rack contact point of `arc`."""
-        centre, radius = self._arc_data(arc)
-        theta = self._theta(arc, self.contact_parameter(arc))
-        return generated_point(centre, radius, theta, 1.0, self.helix_angle)[1]
-
     def placement(self, gear: int) -> Scalar:
         """At zero rotation the mid-face section of tooth 0 has the pinion's convex contact
         point ($t = \\alpha$) and the gear's concave one on the common normal through the
         pitch point: tooth centres at $\\xi_{I,a}/R_1$ and $\\pi + \\xi_{I,f}/R_2$ (the same for
         both zones: they are the same teeth)."""
         if gear == 0:
-            return self._pitch_point(CONVEX) / self.pitch_radius[..., 0]
-        return jnp.pi + self._pitch_point(CONCAVE) / self.pitch_radius[..., 1]
-
-    def contact_instant(self) -> Scalar:
-        """Pinion slice rotation (rad) at which this zone's rack contact points meet on the
-        common normal through the pitch point: 0 for the convex driving zone, and
-        $(\\xi_{I,f} - \\xi_{I,a})/R_1$ for the concave one (the pitch-line points of the two
-        contact normals differ, which is why the zones lie $q_{TA}$ apart along the face)."""
-        if self._arc(0) == CONVEX:
-            return jnp.zeros_like(self.normal_module)
-        return (self._pitch_point(CONCAVE) - self._pitch_point(CONVEX)) / self.pitch_radius[..., 0]
-
-    def contact_guess(self, angle: ArrayLike) -> tuple[Scalar, Scalar]:
-        """The rack contact points ($t = \\alpha$) within `contact_window` of the zone's
-        `contact_instant`, far off the flanks beyond it (no contact of this tooth pair).
-
-        Both racks generate their whole working arcs within a few milliradians of the
-        instant, so the generated points are no guide; the slice tangency itself stays
-        near the contact points for ~0.02 rad and reaches the arc ends by ~0.05 rad, so
-        the contact points are the start for every slice of the window."""
-        angle = as_float(angle)
-        near = jnp.abs(angle - self.contact_instant()) < self.contact_window
-        far = 1e3 * self.normal_module
-        u1 = self.contact_parameter(self._arc(0))
-        u2 = self.contact_parameter(self._arc(1))
-        return jnp.where(near, u1, u1 + far), jnp.where(near, u2, u2 + far)
-
-    def parameter_at_radius(self, gear: int, radius: ArrayLike) -> Scalar:
-        """From $r \\approx R + p_\\eta$: $\\sin\\theta = (r - R - C_\\eta)/\\rho$ on the arc."""
-        arc = self._arc(gear)
-        centre, rho = self._arc_data(arc)
-        s = jnp.clip((as_float(radius) - self.pitch_radius[..., gear] - centre[1]) / rho, -0.999, 0.999)
-        t = jnp.arcsin(s) if arc == CONVEX else -jnp.arcsin(s)
-        lo, hi = self.parameter_domain(gear)
-        return jnp.clip(self._u(arc, t), lo, hi)
+            return self.pitch_point(CONVEX) / self.pitch_radius[..., 0]
+        return jnp.pi + self.pitch_point(CONCAVE) / self.pitch_radius[..., 1]
 
     def action_radius(self, gear: int) -> Scalar:
         """$R_i\\cos\\alpha_t$: the moment arm of the nominal contact normal (mm)."""
         return self.pitch_radius[..., gear] * jnp.cos(self.transverse_pressure_angle)
-
-    def relief_coordinates(self, gear: int) -> tuple[Scalar, Scalar]:
-        return self.profile_limits(gear)
 
     # ------------------------------------------------------------------ drawings
     def tooth_profile(self, gear: int, samples: int = 40) -> np.ndarray:
@@ -462,45 +253,118 @@ class DoubleArcGearPair(AbstractGearPair):
         return np.concatenate(out)
 
 
-class AxialMeshing(eqx.Module):
-    """Seed 003, formulas (27)–(28) (mm).
+class DoubleArcZone(AbstractFlankPair):
+    """The drive flanks of one contact zone of a `DoubleArcGearPair`: the pinion's convex
+    addendum on the gear's concave dedendum (`zone` 0, convex driving tooth) or the
+    pinion's concave dedendum on the gear's convex addendum (`zone` 1).
 
     Attributes:
-        axial_pitch: $P_x = \\pi m_n/\\sin\\beta$.
-        convex_to_concave: $q_{TA}$, axial distance from the convex-flank contact point to
-            the concave-flank contact point of the same tooth.
-        concave_to_convex: $q'_{TA} = P_x - q_{TA}$ (to the neighbouring tooth).
-        face_excess: $\\Delta b = b - P_x$.
-        condition_28: $\\Delta b < P_x - q_{TA}$, the meshing case the seed analyses
-            (three meshing points, $n = 3$).
+        gears: the pair.
+        zone: 0 or 1 (static).
     """
 
-    axial_pitch: Scalar
-    convex_to_concave: Scalar
-    concave_to_convex: Scalar
-    face_excess: Scalar
-    condition_28: jnp.ndarray
+    gears: DoubleArcGearPair
+    zone: int = eqx.field(static=True)
 
+    #: Not conjugate: no plane-of-action fast path; edges are screened by the window only.
+    conjugate_slices: ClassVar[bool] = False
+    screen_edges: ClassVar[bool] = False
+    linear_lead: ClassVar[bool] = True
+    supported_effects: ClassVar[frozenset[str]] = frozenset()
+    effects_note: ClassVar[str] = DoubleArcGearPair.effects_note
+    #: Half-width (rad of pinion rotation) of the window around the contact instant in
+    #: which a slice of a tooth pair is analysed (~0.1 rad holds every slice whose gap is
+    #: below ~1.5 mm of pitch-circle arc).
+    contact_window: ClassVar[float] = 0.1
 
-def axial_meshing(normal_module: ArrayLike, helix_angle_deg: ArrayLike, face_width: ArrayLike, rack: GBT12759Rack = GBT12759Rack()) -> AxialMeshing:
-    r"""Formula (27): $P_x = \pi m_n/\sin\beta$, $\Delta b = b - P_x$,
+    def __check_init__(self):
+        if self.zone not in (CONVEX, CONCAVE):
+            raise ValueError(f"zone must be 0 (convex driving) or 1 (concave driving); got {self.zone!r}")
 
-    $$q_{TA} = \frac{0.5\pi m_n - 0.5j + 2l_a + 2e_a\cot\alpha}{\sin\beta}
-    - 2\Big(\rho_a + \frac{e_a}{\sin\alpha}\Big)\cos\alpha\sin\beta,$$
+    @property
+    def teeth(self) -> tuple[int, int]:
+        return self.gears.teeth
 
-    $q'_{TA} = P_x - q_{TA}$; formula (28) is the case $\Delta b < P_x - q_{TA}$.
-    """
-    check_range("normal_module", normal_module, 0.0, 100.0, low_inclusive=False, unit="mm")
-    check_range("helix_angle_deg", helix_angle_deg, 0.0, 45.0, low_inclusive=False, high_inclusive=False, unit="deg")
-    check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
-    m = as_float(normal_module)
-    beta = as_float(helix_angle_deg) * (math.pi / 180.0)
-    b = as_float(face_width)
-    alpha = math.radians(rack.pressure_angle_deg)
-    la, ea, ra, j = (m * v for v in (rack.convex_centre_offset, rack.convex_centre_shift, rack.convex_radius, rack.backlash))
-    px = math.pi * m / jnp.sin(beta)
-    q = (0.5 * math.pi * m - 0.5 * j + 2 * la + 2 * ea / math.tan(alpha)) / jnp.sin(beta) - 2 * (
-        ra + ea / math.sin(alpha)
-    ) * math.cos(alpha) * jnp.sin(beta)
-    excess = b - px
-    return AxialMeshing(px, q, px - q, excess, excess < px - q)
+    @property
+    def face_width(self) -> Scalar:
+        return self.gears.face_width
+
+    @property
+    def derived(self) -> dict[str, Array] | None:
+        """The pair's resolved quantities (a zone has none of its own)."""
+        return self.gears.derived
+
+    def resolve(self) -> DoubleArcZone:
+        return DoubleArcZone(self.gears.resolve(), self.zone)
+
+    @property
+    def center_distance(self) -> Scalar:
+        return self.gears.center_distance
+
+    @property
+    def root_radius(self) -> Float[Array, "2"]:
+        return self.gears.root_radius
+
+    def geometry_report(self) -> dict[str, ArrayLike]:
+        return self.gears.geometry_report()
+
+    def arc(self, gear: int) -> int:
+        """Working arc of `gear` in this zone: CONVEX (0) or CONCAVE (1)."""
+        return self.zone if gear == 0 else 1 - self.zone
+
+    # ------------------------------------------------------------------ family interface
+    def profile(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
+        return self.gears.arc_point(gear, self.arc(gear), u)
+
+    def profile_limits(self, gear: int) -> tuple[Scalar, Scalar]:
+        return self.gears.arc_limits(self.arc(gear))
+
+    def parameter_domain(self, gear: int) -> tuple[Scalar, Scalar]:
+        return self.gears.arc_domain(self.arc(gear))
+
+    def lead_rotation(self, gear: int, z: ArrayLike) -> Scalar:
+        return self.gears.lead_rotation(gear, z)
+
+    def placement(self, gear: int) -> Scalar:
+        return self.gears.placement(gear)
+
+    def action_radius(self, gear: int) -> Scalar:
+        return self.gears.action_radius(gear)
+
+    def relief_coordinates(self, gear: int) -> tuple[Scalar, Scalar]:
+        return self.profile_limits(gear)
+
+    def contact_instant(self) -> Scalar:
+        """Pinion slice rotation (rad) at which this zone's rack contact points meet on the
+        common normal through the pitch point: 0 for the convex driving zone, and
+        $(\\xi_{I,f} - \\xi_{I,a})/R_1$ for the concave one (the pitch-line points of the two
+        contact normals differ, which is why the zones lie $q_{TA}$ apart along the face)."""
+        gears = self.gears
+        if self.arc(0) == CONVEX:
+            return jnp.zeros_like(gears.normal_module)
+        return (gears.pitch_point(CONCAVE) - gears.pitch_point(CONVEX)) / gears.pitch_radius[..., 0]
+
+    def contact_guess(self, angle: ArrayLike) -> tuple[Scalar, Scalar]:
+        """The rack contact points ($t = \\alpha$) within `contact_window` of the zone's
+        `contact_instant`, far off the flanks beyond it (no contact of this tooth pair).
+
+        Both racks generate their whole working arcs within a few milliradians of the
+        instant, so the generated points are no guide; the slice tangency itself stays
+        near the contact points for ~0.02 rad and reaches the arc ends by ~0.05 rad, so
+        the contact points are the start for every slice of the window."""
+        angle = as_float(angle)
+        near = jnp.abs(angle - self.contact_instant()) < self.contact_window
+        far = 1e3 * self.gears.normal_module
+        u1 = self.gears.contact_parameter(self.arc(0))
+        u2 = self.gears.contact_parameter(self.arc(1))
+        return jnp.where(near, u1, u1 + far), jnp.where(near, u2, u2 + far)
+
+    def parameter_at_radius(self, gear: int, radius: ArrayLike) -> Scalar:
+        """From $r \\approx R + p_\\eta$: $\\sin\\theta = (r - R - C_\\eta)/\\rho$ on the arc."""
+        gears = self.gears
+        arc = self.arc(gear)
+        centre, rho = gears._arc_data(arc)
+        s = jnp.clip((as_float(radius) - gears.pitch_radius[..., gear] - centre[1]) / rho, -0.999, 0.999)
+        t = jnp.arcsin(s) if arc == CONVEX else -jnp.arcsin(s)
+        lo, hi = self.parameter_domain(gear)
+        return jnp.clip(gears._u(arc, t), lo, hi)

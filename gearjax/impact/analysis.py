@@ -242,6 +242,7 @@ def impact_analysis(
         inertia: $(J_1, J_2)$ of the rotating assemblies (t·mm²); default the solid discs
             $\\pi\\rho b(r_b^4 - r_h^4)/2$.
     """
+    pair = pair.resolve()
     ctx = _Context(pair, depth, jnp.asarray(torque, ltca.rotation.dtype), compliance, material, hub_radius,
                    accuracy, tuple(pairs), extended_contact)
     found, column, lower, upper = _bracket(tca, ltca)

@@ -2,6 +2,7 @@
 
 from .analysis import LTCAResult as LTCAResult, loaded_contact_analysis as loaded_contact_analysis
 from .compliance import (
+    AbstractCompliance as AbstractCompliance,
     IsoCompliance as IsoCompliance,
     PointCompliance as PointCompliance,
     SliceCompliance as SliceCompliance,

@@ -26,9 +26,14 @@ import jax.numpy as jnp
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide, safe_sqrt
 from ..accuracy import Accuracy
+from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import TCAResult
 from ..units import Material
 from .solver import NO_CONTACT, ContactProblem, solve_with
+
+#: Families the LTCA supports: line contact of involute sections, whose transverse radius
+#: of curvature at roll length $s$ is $s$ itself (used for the Hertz pressure).
+LTCA_FAMILIES = (AbstractInvolutePair,)
 
 
 class LTCAResult(eqx.Module):
@@ -200,7 +205,7 @@ def loaded_contact_analysis(
     """LTCA of `pair` at pinion torque `torque` (N·mm) on the positions of `tca`.
 
     Args:
-        pair: the gear pair.
+        pair: the gear pair, of a family in `LTCA_FAMILIES` (involute sections).
         tca: its unloaded contact (`tooth_contact_analysis`).
         torque: pinion torque (N·mm), scalar; `vmap` for several loads.
         compliance: a compliance model (`IsoCompliance`, `SliceCompliance`).
@@ -216,6 +221,12 @@ def loaded_contact_analysis(
         rates: also compute $\\mathrm d\\Theta/\\mathrm dT$ (tangent mesh stiffness); without
             it `rotation_rate` is NaN and the program is smaller.
     """
+    if not isinstance(pair, LTCA_FAMILIES):
+        raise ValueError(
+            f"loaded contact analysis supports {', '.join(f.__name__ for f in LTCA_FAMILIES)} pairs "
+            f"(line contact of involute sections); got {type(pair).__name__}"
+        )
+    pair = pair.resolve()
     n_mid = accuracy.face_slices
     valid = tca.valid[..., :n_mid]
     if active_pairs is not None:
@@ -250,7 +261,8 @@ def loaded_contact_analysis(
     loads = sol.loads.reshape(shape)
     gaps = sol.gaps.reshape(shape)
 
-    # Hertz pressure of each slice (line contact, normal section).
+    # Hertz pressure of each slice (line contact, normal section); the roll lengths are
+    # the involutes' radii of curvature.
     frac = tca.transverse_normal_fraction[..., :n_mid]
     length = tca.slice_width[..., :n_mid] / frac
     curvature = frac * (1.0 / tca.pinion_parameter[..., :n_mid] + 1.0 / tca.gear_parameter[..., :n_mid])

@@ -31,16 +31,18 @@ $\Delta z$ over $\Delta z/|n_t|$.
   and body deflection).
 """
 
-from __future__ import annotations
+import abc
+from typing import ClassVar
 
 import equinox as eqx
+from equinox import AbstractClassVar
 import jax
 import jax.numpy as jnp
 import lineax as lx
 
 from .._custom_types import Array, Float
 from .._validate import check_choice, check_range
-from ..geometry.involute import InvoluteGearPair
+from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import TCAResult
 from ..units import Material
 from .iso import iso_mesh_stiffness
@@ -77,13 +79,42 @@ def _slice_lengths(tca: TCAResult, n_mid: int):
     return width, frac
 
 
-class IsoCompliance(eqx.Module):
+class AbstractCompliance(eqx.Module):
+    """A compliance model: the influence matrix of the contact points of every position.
+
+    Attributes:
+        families: the pair families whose teeth the model describes (class variable);
+            `Scene` refuses a loaded scene of any other family.
+    """
+
+    families: AbstractClassVar[tuple[type, ...]]
+
+    @abc.abstractmethod
+    def __call__(
+        self, pair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights
+    ) -> PointCompliance:
+        """Compliance of the contact points of `tca`'s first `n_mid` slices.
+
+        Args:
+            pair: the (resolved) gear pair.
+            material: both gears' material.
+            hub_radius: inner radius of each gear body (mm), shape (2,).
+            tca: the unloaded contact.
+            n_mid: number of face slices (the midpoints; the face ends are not loaded).
+            quadrature: Gauss-Legendre points of the tooth integrals.
+            weights: (pos, pair, slice) scale of each slice's contact-line length.
+        """
+
+
+class IsoCompliance(AbstractCompliance):
     """Uniform line stiffness from ISO 6336-1 method B (see the module docstring).
 
     Call with `(pair, material, hub_radius, tca, n_mid, quadrature, weights)`; `weights`
     scale each slice's contact-line length."""
 
-    def __call__(self, pair: InvoluteGearPair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
+    families: ClassVar[tuple[type, ...]] = (AbstractInvolutePair,)
+
+    def __call__(self, pair: AbstractInvolutePair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
         del hub_radius, quadrature
         iso = iso_mesh_stiffness(pair)
         width, frac = _slice_lengths(tca, n_mid)
@@ -120,7 +151,7 @@ def pasternak_compliance(compliance_per_width, slice_width, decay_length):
     return jax.vmap(lambda e: lx.linear_solve(operator, e, lx.Tridiagonal()).value, out_axes=1)(basis)
 
 
-class SliceCompliance(eqx.Module):
+class SliceCompliance(AbstractCompliance):
     """Potential-energy slices with a shear-layer coupling and Hertz contact.
 
     Attributes:
@@ -129,6 +160,8 @@ class SliceCompliance(eqx.Module):
         hertz: "palmgren" (nonlinear line contact, steel) or "linear" (Yang & Sun).
     """
 
+    families: ClassVar[tuple[type, ...]] = (AbstractInvolutePair,)
+
     coupling_length: float = eqx.field(static=True, default=1.1)
     hertz: str = eqx.field(static=True, default="palmgren")
 
@@ -136,7 +169,7 @@ class SliceCompliance(eqx.Module):
         check_range("coupling_length", self.coupling_length, 0.0, 50.0, unit="m_n")
         check_choice("hertz", self.hertz, HERTZ_LAWS)
 
-    def tooth_compliances(self, pair: InvoluteGearPair, material: Material, hub_radius, gear: int, roll_length, quadrature: int):
+    def tooth_compliances(self, pair: AbstractInvolutePair, material: Material, hub_radius, gear: int, roll_length, quadrature: int):
         """Bending, shear, axial and foundation compliance (mm²/N) of `gear`'s tooth for a
         load at roll length `roll_length` (mm), per unit face width."""
         rb = pair.base_radius[..., gear]
@@ -158,7 +191,7 @@ class SliceCompliance(eqx.Module):
         kf = foundation_compliance(a1, rb, rf, hub_radius[..., gear], theta, e)
         return kb, ks, ka, kf
 
-    def __call__(self, pair: InvoluteGearPair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
+    def __call__(self, pair: AbstractInvolutePair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
         """Compliance of every point; `weights` (pos, pair, slice) scale each slice's
         contact-line length (the tooth slice itself always spans the whole cell)."""
         width, frac = _slice_lengths(tca, n_mid)  # (slice,), (pos, pair, slice)

@@ -19,7 +19,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from .._custom_types import ArrayLike, Scalar
-from ..geometry.involute import InvoluteGearPair
+from ..geometry.involute_section import AbstractInvolutePair
 
 #: C1 ... C9 of ISO 6336-1 method B (mm·µm/N).
 ISO_Q_COEFFICIENTS = (0.04723, 0.15551, 0.25791, -0.00635, -0.11654, -0.00193, -0.24188, 0.00529, 0.00182)
@@ -42,7 +42,7 @@ class IsoStiffness(eqx.Module):
 
 
 def iso_mesh_stiffness(
-    pair: InvoluteGearPair,
+    pair: AbstractInvolutePair,
     *,
     profile_shift: ArrayLike | None = None,
     transverse_contact_ratio: ArrayLike | None = None,

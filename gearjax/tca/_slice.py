@@ -32,7 +32,7 @@ import optimistix as optx
 
 from .._custom_types import Array, Float, Scalar
 from .._numerics import as_float, cross2, safe_divide, safe_norm
-from ..geometry._base import AbstractGearPair
+from ..geometry._base import AbstractFlankPair
 from ..geometry.depth import FlankDepth
 
 FLANK, GEAR_TIP_EDGE, PINION_TIP_EDGE = 0, 1, 2
@@ -42,7 +42,7 @@ KIND_NAMES = ("flank", "gear_tip_edge", "pinion_tip_edge")
 class SliceProblem(eqx.Module):
     """Data of one (tooth pair, slice, pinion position) contact problem."""
 
-    pair: AbstractGearPair
+    pair: AbstractFlankPair
     depth: FlankDepth
     pair_index: Scalar  # k: pair k meshes k pitches after pair 0
     z: Scalar  # axial position of the slice (mm)
@@ -137,7 +137,7 @@ def relevance(problem: SliceProblem):
     g1, g2 = pair.contact_guess(problem.pinion_rotation)
     m1, m2 = 0.25 * (hi1 - lo1), 0.25 * (hi2 - lo2)
     flank = (g1 > lo1 - m1) & (g1 < hi1 + m1) & (g2 > lo2 - m2) & (g2 < hi2 + m2)
-    if not getattr(pair, "screen_edges", True):
+    if not pair.screen_edges:
         # Non-conjugate families (double circular arc): the guess does not follow the
         # contact, so the edges are analysed wherever the flank is.
         return jnp.stack([flank, flank, flank])

@@ -146,10 +146,11 @@ def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tu
     position of the cycle and some slice, widened by `margin` pairs on each side for the
     edge contacts of approaching and receding teeth.
     """
-    zones = getattr(pair, "contact_zones", None)
-    if zones is not None and getattr(pair, "zone", 0) is None:
-        window = sorted(set().union(*(pair_window(p, pitches, margin) for p in zones())))
+    zones = pair.contact_zones()
+    if len(zones) > 1:
+        window = sorted(set().union(*(pair_window(zone, pitches, margin) for zone in zones)))
         return tuple(range(window[0], window[-1] + 1))
+    pair = zones[0].resolve()
     grid = np.linspace(-math.pi, math.pi, 8001)
     u1, u2 = jax.vmap(pair.contact_guess)(as_float(grid))
     lo1, hi1 = pair.profile_limits(0)
@@ -183,7 +184,8 @@ def tooth_contact_analysis(
     """Unloaded TCA of `pair` over `pitches` angular pitches of the pinion.
 
     Args:
-        pair: the gear pair (any tooth family).
+        pair: the gear pair (any tooth family; several contact zones are analysed one by
+            one and merged, `merge_zones`).
         depth: modifications and errors (`FlankDepth`); None for perfect flanks.
         accuracy: discretisation and solver settings (static).
         pairs: the tooth-pair window (static); derived from the geometry if omitted
@@ -195,15 +197,16 @@ def tooth_contact_analysis(
     Returns:
         `TCAResult`.
     """
-    zones = getattr(pair, "contact_zones", None)
-    if zones is not None and getattr(pair, "zone", 0) is None:
+    zones = pair.contact_zones()
+    if len(zones) > 1:
         # Families with several contact zones per tooth (double circular arc: convex and
         # concave driving tooth): one analysis per zone, merged along the pair axis.
         results = [
-            tooth_contact_analysis(p, depth, accuracy=accuracy, pairs=pairs, pitches=pitches, pinion_angles=pinion_angles)
-            for p in zones()
+            tooth_contact_analysis(zone, depth, accuracy=accuracy, pairs=pairs, pitches=pitches, pinion_angles=pinion_angles)
+            for zone in zones
         ]
         return merge_zones(results)
+    pair = zones[0].resolve()
     depth = FlankDepth() if depth is None else depth
     if pinion_angles is not None:
         phi = as_float(pinion_angles)
@@ -224,7 +227,7 @@ def tooth_contact_analysis(
             return solve_slice(make_problem(pair, depth, k, zz, phi1), solver, accuracy.newton_max_steps)
 
     else:
-        if not getattr(pair, "conjugate_slices", False):
+        if not pair.conjugate_slices:
             raise ValueError(
                 f"tca_method='plane_of_action' needs an involute family; {type(pair).__name__} "
                 "has no plane of action: use tca_method='surface'"
@@ -386,7 +389,7 @@ def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int,
 
             y = jnp.stack([u1, u2, offset])
             rise = _peak_correction(residual, y, z[..., j], lead_correction, half, limits)
-            if getattr(pair, "linear_lead", True):
+            if pair.linear_lead:
                 return rise
             # A curved lead bends the tip edges' offsets g(z) far from a parabola, so one
             # Newton step would overshoot (seen: +4e-4 rad on a conjugate curvilinear pair);

@@ -1,0 +1,89 @@
+"""Trace, lower and compile time of `simulate` on the built-in default scene, timed apart.
+
+    python benchmarks/trace_compile.py [--accuracy fast|default|reference] [--out NAME]
+
+Each phase is timed once in a fresh process (JAX caches traces in-process, so a second
+measurement would time the cache). The persistent compilation cache is not used.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gearjax  # noqa: F401  (sets its XLA flag before JAX starts its backends)
+import equinox as eqx
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+from _common import machine, write  # noqa: E402
+
+from gearjax.scene import _prepare, _simulate  # noqa: E402
+from gearjax.scene_file import default_scene  # noqa: E402
+
+
+def count_equations(jaxpr) -> int:
+    """Equations of a jaxpr, those of its sub-jaxprs (loops, conditionals, calls) included:
+    a measure of the traced program's size that does not depend on the machine's load."""
+    total = 0
+    for eqn in jaxpr.eqns:
+        total += 1
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (tuple, list)) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if hasattr(inner, "eqns"):
+                    total += count_equations(inner)
+    return total
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--accuracy", default="default")
+    parser.add_argument("--out", default=None, help="write benchmarks/results/<OUT>.json")
+    parser.add_argument("--trace-only", action="store_true", help="stop after lowering")
+    args = parser.parse_args()
+    scene, _ = default_scene()
+    if args.accuracy != "default":
+        import dataclasses
+
+        scene = dataclasses.replace(scene, accuracy=gearjax.Accuracy.preset(args.accuracy))
+    scene = _prepare(scene)
+    dynamic, static = eqx.partition(scene, eqx.is_array)
+    fn = jax.jit(lambda d: _simulate.__wrapped__(eqx.combine(d, static)))
+    t0 = time.perf_counter()
+    traced = fn.trace(dynamic)
+    t1 = time.perf_counter()
+    lowered = traced.lower()
+    t2 = time.perf_counter()
+    if args.trace_only:
+        print(f"jaxpr_equations {count_equations(traced.jaxpr.jaxpr)}")
+        print(f"stablehlo_lines {lowered.as_text().count(chr(10))}")
+        print(f"trace_s {t1 - t0:.2f}  lower_s {t2 - t1:.2f}")
+        return
+    compiled = lowered.compile()
+    t3 = time.perf_counter()
+    jax.block_until_ready(compiled(dynamic))
+    t4 = time.perf_counter()
+    jax.block_until_ready(compiled(dynamic))
+    t5 = time.perf_counter()
+    out = {
+        "machine": machine(),
+        "scene": "default (seed 001, paper optimum, 1000 N m, 5000 rpm, impact)",
+        "accuracy": args.accuracy,
+        "jaxpr_equations": count_equations(traced.jaxpr.jaxpr),
+        "stablehlo_lines": lowered.as_text().count("\n"),
+        "trace_s": t1 - t0,
+        "lower_s": t2 - t1,
+        "compile_s": t3 - t2,
+        "first_run_s": t4 - t3,
+        "run_s": t5 - t4,
+    }
+    for key, value in out.items():
+        print(f"{key:12s} {value if not isinstance(value, float) else f'{value:.2f}'}")
+    if args.out:
+        write(args.out, out)
+
+
+if __name__ == "__main__":
+    main()
