@@ -23,7 +23,6 @@ from .geometry.depth import FlankDepth as FlankDepth
 from .geometry.errors import MeshErrors as MeshErrors
 from .geometry.modification import (
     FlankModification as FlankModification,
-    paper_optimum as paper_optimum,
 )
 from .scene import (
     OperatingPoint as OperatingPoint,

@@ -5,7 +5,9 @@
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
-scene file prints one line naming the field and exits with status 2.
+scene file prints one line naming the field and exits with status 2. `reproduce` runs the
+reproductions of `gearjax.papers` (the command is presentation: it may import the papers
+package, the core may not).
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ def _enable_x64() -> None:
 def _run(args: argparse.Namespace) -> int:
     from .report import result_dict, summary
     from .scene import simulate
-    from .scene_file import SEED_001_NOTE, SceneFileError, default_scene, load_scene
+    from .papers.seed001 import SEED_001_NOTE
+    from .scene_file import SceneFileError, default_scene, load_scene
 
     try:
         if args.scene is None:
@@ -48,14 +51,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from . import reproduce
+    from .papers import curvilinear, double_arc
 
     if args.paper == "dca":
-        out = reproduce.dca(cross_check=args.cross_check)
-        print(json.dumps(out, indent=2) if args.json else reproduce.summary_dca(out))
+        out = double_arc.reproduce(cross_check=args.cross_check)
+        print(json.dumps(out, indent=2) if args.json else double_arc.summary(out))
         return 0
-    out = reproduce.curvilinear()
-    print(json.dumps(out, indent=2) if args.json else reproduce.summary_curvilinear(out))
+    out = curvilinear.reproduce()
+    print(json.dumps(out, indent=2) if args.json else curvilinear.summary(out))
     return 0
 
 

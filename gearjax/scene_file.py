@@ -26,13 +26,6 @@ class SceneFileError(ValueError):
     """A scene file that cannot be turned into a `Scene`; the message names the field."""
 
 
-#: Paper note for the default scene (seed 001): its stated centre distance is impossible.
-SEED_001_NOTE = (
-    "seed 001 states a = 261.0 mm, which is inconsistent with beta = 27.5 deg and x1 = x2 = 0 "
-    "(261.0 mm would need x1 + x2 = -2.87; it is close to r_b1 + r_b2): gearjax uses "
-    "x1 = x2 = 0 and the standard a = 281.85 mm"
-)
-
 DEFAULT_SCENE_TOML = """\
 # Seed 001 (mesh-in impact of helical gears): the 29/71 pair with the paper's optimal
 # modification (its Table 2), at the design point 1000 N·m and 5000 rpm.

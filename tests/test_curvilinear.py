@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import gearjax as gj
-from gearjax.reproduce import contact_line
+from gearjax.papers.curvilinear import contact_line
 from gearjax.tca import tooth_contact_analysis
 
 

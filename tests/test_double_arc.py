@@ -1,12 +1,16 @@
 """Double-circular-arc gears (GB/T 12759): axial meshing facts (27)-(28) and the impact force
-formula (7) against seed 000/003's Tables 1 and 2."""
+formula (7) against seed 000/003's Tables 1 and 2 (gearjax.papers.double_arc), the rack, the
+generated surfaces and the four-state impact model."""
 
 import math
 
+import jax.numpy as jnp
 import pytest
 
-from gearjax.geometry.double_arc import GBT12759Rack, axial_meshing
-from gearjax.impact.double_arc import SEED_TABLES, impact_force, seed_tables
+from gearjax.geometry.double_arc import GBT12759Rack
+from gearjax.impact.energy import impact_force as energy_impact_force
+from gearjax.impact.energy import seed_equivalent_mass
+from gearjax.papers.double_arc import SEED_TABLES, axial_meshing, formula7_impact_force, seed_tables
 
 
 def test_formula_27_reproduces_the_seed_case():
@@ -38,14 +42,32 @@ def test_consistent_units_are_sqrt_1000_smaller():
     for table in ("table1", "table2"):
         for p, s in zip(paper[table]["gearjax"], si[table]["gearjax"]):
             assert p / s == pytest.approx(math.sqrt(1000.0), rel=1e-12)
+    assert paper["inertia"] == pytest.approx(1000.0 * si["inertia"], rel=1e-14)  # kg mm^2 vs t mm^2
+
+
+def test_tables_default_to_newtons():
+    """Without `paper_units` the forces are in N: the seed's printed numbers over sqrt(1000)."""
+    si = seed_tables()
+    assert si["units"] == "N"
+    for table in ("table1", "table2"):
+        for paper, ours in zip(SEED_TABLES[table]["force"], si[table]["gearjax"]):
+            assert ours == pytest.approx(paper / math.sqrt(1000.0), rel=3e-4)
 
 
 def test_force_grows_as_the_square_root_of_stiffness_over_points():
-    f1 = float(impact_force(50.0, 1e6, 3, [1e-3, 2e-3], [40.0, 60.0]))
-    f2 = float(impact_force(50.0, 4e6, 3, [1e-3, 2e-3], [40.0, 60.0]))
-    f3 = float(impact_force(50.0, 1e6, 12, [1e-3, 2e-3], [40.0, 60.0]))
+    f1 = float(formula7_impact_force(50.0, 1e6, 3, [1e-3, 2e-3], [40.0, 60.0]))
+    f2 = float(formula7_impact_force(50.0, 4e6, 3, [1e-3, 2e-3], [40.0, 60.0]))
+    f3 = float(formula7_impact_force(50.0, 1e6, 12, [1e-3, 2e-3], [40.0, 60.0]))
     assert f2 == pytest.approx(2 * f1, rel=1e-12) and f3 == pytest.approx(f1 / 2, rel=1e-12)
-    assert SEED_TABLES["stiffness"][0] == 1.8084e6
+
+
+def test_formula_7_is_the_energy_method_for_a_linear_contact():
+    """With one meshing point and alpha = 0, formula (7) is the energy balance of a linear
+    spring, 1/2 m v^2 = 1/2 F^2/K, i.e. `gearjax.impact.energy.impact_force` with n = 1."""
+    inertia, radii = jnp.asarray([3e-3, 7e-3]), jnp.asarray([40.0, 65.0])
+    ours = formula7_impact_force(50.0, 2e5, 1, inertia, radii, 0.0)
+    force, _ = energy_impact_force(seed_equivalent_mass(inertia, radii), 50.0, 2e5, 1.0)
+    assert float(ours) == pytest.approx(float(force), rel=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -54,9 +76,9 @@ def test_force_grows_as_the_square_root_of_stiffness_over_points():
         (lambda: axial_meshing(0.0, 15.0, 55.0), "normal_module"),
         (lambda: axial_meshing(4.0, 0.0, 55.0), "helix_angle_deg"),
         (lambda: axial_meshing(4.0, 15.0, -1.0), "face_width"),
-        (lambda: impact_force(-1.0, 1e6, 3, [1.0, 1.0], [1.0, 1.0]), "velocity"),
-        (lambda: impact_force(1.0, 1e6, 0, [1.0, 1.0], [1.0, 1.0]), "meshing_points"),
-        (lambda: impact_force(1.0, float("nan"), 3, [1.0, 1.0], [1.0, 1.0]), "stiffness"),
+        (lambda: formula7_impact_force(-1.0, 1e6, 3, [1.0, 1.0], [1.0, 1.0]), "velocity"),
+        (lambda: formula7_impact_force(1.0, 1e6, 0, [1.0, 1.0], [1.0, 1.0]), "meshing_points"),
+        (lambda: formula7_impact_force(1.0, float("nan"), 3, [1.0, 1.0], [1.0, 1.0]), "stiffness"),
     ],
 )
 def test_bad_input(call, match):
@@ -66,13 +88,12 @@ def test_bad_input(call, match):
 
 # ---------------------------------------------------------------- rack, surfaces, four states
 import jax
-import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
 from gearjax.geometry.depth import FlankDepth
 from gearjax.geometry.double_arc import DoubleArcGearPair
-from gearjax.impact.double_arc import SEED_VELOCITIES, four_state_impact
+from gearjax.papers.double_arc import SEED_VELOCITIES, four_state_impact
 from gearjax.tca._slice import make_problem, solve_slice
 
 SEED_PAIR = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
@@ -135,12 +156,16 @@ def test_slice_contact_of_the_convex_zone():
 
 
 def test_four_states_reproduce_the_seed_velocities():
-    result = four_state_impact(SEED_PAIR, 0.1, 200.0)
+    # the seed's 200 rpm in the engine's rad/s
+    result = four_state_impact(SEED_PAIR, 0.1, 200.0 * 2.0 * math.pi / 60.0)
     # 81.57 is reproduced to 5e-4 (h_jf = 0.19997 from the recalled delta_2, not 0.2)
     for ours, paper in zip(np.asarray(result.velocity), SEED_VELOCITIES):
         assert ours == pytest.approx(paper, rel=1e-3)
+    # the seed's own unit on request
+    rpm = four_state_impact(SEED_PAIR, 0.1, speed_rpm=200.0)
+    assert np.asarray(rpm.velocity) == pytest.approx(np.asarray(result.velocity), rel=1e-14)
     # one batched function: a subset of states gives the same numbers
-    sub = four_state_impact(SEED_PAIR, 0.1, 200.0, states=(3, 0))
+    sub = four_state_impact(SEED_PAIR, 0.1, speed_rpm=200.0, states=(3, 0))
     assert np.asarray(sub.velocity) == pytest.approx(np.asarray(result.velocity)[[3, 0]], rel=1e-12)
     # formula (26)'s cos(24 deg) is not the exact distance for state 3
     assert float(result.exact_radius[3]) > float(result.radius[3]) * 1.02
@@ -148,7 +173,7 @@ def test_four_states_reproduce_the_seed_velocities():
 
 def test_four_states_gradient_matches_finite_differences():
     def total(delta):
-        return jnp.sum(four_state_impact(SEED_PAIR, delta, 200.0).velocity * jnp.arange(1.0, 5.0))
+        return jnp.sum(four_state_impact(SEED_PAIR, delta, speed_rpm=200.0).velocity * jnp.arange(1.0, 5.0))
 
     grad = float(jax.grad(total)(0.1))
     h = 1e-6
@@ -172,7 +197,21 @@ def test_bad_double_arc_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
         DoubleArcGearPair(**args)
     with pytest.raises(ValueError, match="pitch_circle_error"):
-        four_state_impact(SEED_PAIR, -0.1, 200.0)
+        four_state_impact(SEED_PAIR, -0.1, 20.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(), "exactly one of speed"),
+        (dict(speed=20.0, speed_rpm=200.0), "exactly one of speed"),
+        (dict(speed=-1.0), "speed"),
+        (dict(speed_rpm=0.0), "speed_rpm"),
+    ],
+)
+def test_four_state_speed_input(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        four_state_impact(SEED_PAIR, 0.1, **kwargs)
 
 
 def test_double_arc_scene_file_and_no_loaded_stages():

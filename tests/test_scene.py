@@ -14,9 +14,9 @@ from gearjax import (
     MeshErrors,
     OperatingPoint,
     Scene,
-    paper_optimum,
     simulate,
 )
+from gearjax.papers.seed001 import paper_optimum
 from gearjax.scene import program_text, stack_scenes
 
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)

@@ -8,7 +8,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from gearjax import Accuracy, FlankDepth, FlankModification, InvoluteGearPair, MeshErrors, paper_optimum
+from gearjax import Accuracy, FlankDepth, FlankModification, InvoluteGearPair, MeshErrors
+from gearjax.papers.seed001 import paper_optimum
 from gearjax.tca import pair_window, tooth_contact_analysis
 
 ACC = Accuracy(positions_per_pitch=12, face_slices=7)

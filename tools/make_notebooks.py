@@ -34,7 +34,7 @@ NB01 = [
     "The seed 001 pair (z 29/71, m_n 5 mm, beta 27.5 deg, b 42 mm). The paper states a = 261.0 mm, "
     "which is inconsistent with its helix angle and zero profile shift; gearjax uses the standard "
     "a = 281.85 mm.",
-    SETUP,
+    SETUP + "\nfrom gearjax.papers.seed001 import paper_optimum",
     """pair = gj.InvoluteGearPair((29, 71), normal_module=5.0, pressure_angle_deg=20.0,
                            helix_angle_deg=27.5, face_width=42.0)
 print(f"a = {float(pair.center_distance):.3f} mm, r_b = {np.asarray(pair.base_radius)} mm")
@@ -49,7 +49,7 @@ heavy = gj.FlankModification(root_relief=0.015, tip_relief=0.015, root_relief_le
                              tip_relief_length=9.0, crowning=0.012, unmodified_length=4.0)
 results = {
     "unmodified": gj.simulate(gj.Scene(pair, accuracy=acc)).tca,
-    "paper optimum (Table 2)": gj.simulate(gj.Scene(pair, gj.paper_optimum(), accuracy=acc)).tca,
+    "paper optimum (Table 2)": gj.simulate(gj.Scene(pair, paper_optimum(), accuracy=acc)).tca,
     "heavy modification": gj.simulate(gj.Scene(pair, heavy, accuracy=acc)).tca,
 }
 ax = None
@@ -85,7 +85,7 @@ NB03 = [
     "involute, displaced along the base circle by d(z) = R_t − √(R_t² − z²), so the tooth "
     "trace is an arc of radius R_t. The general TCA finds line contact along an arc of the "
     "plane of action of length L = 2 R_t asin(b/2R_t) (seed 002, eq. 18).",
-    SETUP + "\nimport jax.numpy as jnp\nfrom gearjax.reproduce import contact_line",
+    SETUP + "\nimport jax.numpy as jnp\nfrom gearjax.papers.curvilinear import contact_line",
     """radii = [10.5, 12.0, 15.0, 30.0, 1e6]
 fig, ax = plt.subplots(figsize=(6, 4))
 for radius in radii:
@@ -119,10 +119,11 @@ NB04 = [
     "over the cycle. The slice model couples potential-energy tooth compliance, Sainsot's fillet "
     "foundation and Palmgren's line contact; the iso model is ISO 6336-1 method B as a uniform "
     "line stiffness.",
-    SETUP + "\nfrom gearjax.sweep import load_sweep\nfrom gearjax.ltca import iso_mesh_stiffness, IsoCompliance",
+    SETUP + "\nfrom gearjax.sweep import load_sweep\nfrom gearjax.ltca import iso_mesh_stiffness, IsoCompliance"
+    "\nfrom gearjax.papers.seed001 import paper_optimum",
     """pair = gj.InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)
 acc = gj.Accuracy(positions_per_pitch=24, face_slices=15)
-scene = gj.Scene(pair, gj.paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0, 5000.0), accuracy=acc)
+scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0, 5000.0), accuracy=acc)
 torques_Nm = np.array([0.0, 100.0, 250.0, 400.0, 700.0, 1000.0, 1300.0, 1600.0, 2000.0])
 sweep = load_sweep(scene, torques_Nm * 1e3)
 lte = np.asarray(sweep.ltca.transmission_error_line) * 1e3

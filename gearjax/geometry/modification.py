@@ -138,11 +138,3 @@ class FlankModification(eqx.Module):
                 f"{name}.unmodified_length (y6) must be in [0, {np.min(np.asarray(face_width)):.4f}) "
                 f"mm, less than the face width; got {np.max(np.asarray(self.unmodified_length)):.4f} mm"
             )
-
-
-def paper_optimum() -> FlankModification:
-    """Seed 001's optimal modification (its Table 2): y = (5.9, 6.8, 3800, 4300, 6.2, 4600) um.
-
-    Note that its tip relief length 4.3 mm exceeds the paper's own bound of 0.8 m_n = 4.0 mm.
-    """
-    return FlankModification.from_micrometres(jnp.array([5.9, 6.8, 3800.0, 4300.0, 6.2, 4600.0]))

@@ -1,4 +1,11 @@
-r"""Seed 000/003's meshing impact force of double-circular-arc gears, formula (7).
+r"""Seeds 000/003 (double-circular-arc gears, GB/T 12759): the paper's own formulas, tables
+and the `gearjax reproduce dca` reproduction. Imports the core; nothing in the core imports it.
+
+**Axial meshing facts**, formulas (27)–(28) (`axial_meshing`): the axial pitch, the axial
+distances between the convex- and concave-flank contact points, and the meshing case with three
+meshing points.
+
+**Meshing impact force**, formula (7) (`formula7_impact_force`):
 
 $$F_s = \frac{v_s}{\cos\alpha}\sqrt{\frac{K}{n}\,\frac{J_1J_2}{J_1R_2^2 + J_2R_1^2}}$$
 
@@ -9,8 +16,8 @@ out to four digits with $n = 3$, solid discs $J = \pi\rho bR^4/2$ at the referen
 mixed units: $v$ in mm/s, $K$ in N/mm and $J$ in kg·mm². Then $K J/R^2$ is in N·kg/mm² and
 $v\sqrt{\cdot}$ in mm/s·√(N·kg)/mm, which is $\sqrt{1000}$ N, not N (1 kg = 1e-3 N·s²/mm).
 In consistent units (N, mm, s, t) the same inputs give forces $\sqrt{1000} \approx 31.6$
-times smaller. `paper_units=True` reproduces the tables, labelled; everything else uses
-consistent units.
+times smaller. Every function here takes consistent units; `paper_units=True` (explicit,
+never the default) returns the seed's numbers, labelled.
 
 **The four meshing-impact states** (seed section 3.1, `four_state_impact`): concave or convex
 driving tooth × $t_1 < t_2$ or $t_1 > t_2$. Each state is the same computation on
@@ -18,7 +25,8 @@ state-specific points: find the rotation $\varphi$ at which an arc of radius
 $\rho_{AV} = (\rho_a + \rho_f)/2$ about one gear's arc centre $A$ (on its pitch circle)
 reaches the mate's edge point $B$ at depth $h_{jf}$ ("reverse method"), then the impact
 radius is the distance from the pitch point to the line $AB$ (formula 15) and
-$v_s = PE\,(\omega_1 + \omega_2)$ (formula 4). The four states run as one batched function
+$v_s = PE\,(\omega_1 + \omega_2)$ (formula 4), with the pinion speed in rad/s (the seed's rpm only
+through `speed_rpm=`). The four states run as one batched function
 (the state is an array index), differentiable through the root by the implicit function
 theorem. Repairs of the printed formulas (each cited again where it is applied):
 
@@ -36,41 +44,99 @@ theorem. Repairs of the printed formulas (each cited again where it is applied):
   exact distance (formula 15) is reported beside it (`exact_radius`).
 
 The rack values $\rho_f = 1.41$ and $h_{jf} = 0.20$ are the recalled GB/T 12759 values
-(`gearjax.geometry.double_arc`); states 0 and 1 reproduce the seed's velocities with them,
+(`gearjax.geometry.double_arc.GBT12759Rack`); states 0 and 1 reproduce the seed's velocities with them,
 and jointly solving those two states for $(\rho_f, h_{jf})$ gives (1.4098, 0.2000): the
 comparison for states 0 and 1 is therefore a consistency check of the recalled rack, not an
 independent reproduction. States 2 and 3 are independent of that back-calculation.
+
+**Reproduction** (`reproduce`, `summary`; `gearjax reproduce dca [--cross-check]`): formula (27)
+against the seed's numbers, the four states against its velocities, Tables 1–2 in its units and
+in N, and optionally `cross_check_tca`: the first contacts found by the general TCA on the
+generated surfaces (`handover_impacts`).
 """
 
 from __future__ import annotations
 
 import math
 
-import jax.numpy as jnp
-
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import optimistix as optx
 
+from ..accuracy import Accuracy
 from .._custom_types import Array, ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_range
-from .energy import gear_inertia
+from ..geometry.double_arc import ZONE_NAMES, DoubleArcGearPair, GBT12759Rack
+from ..impact.energy import gear_inertia
+from ..tca.analysis import tooth_contact_analysis
+from ..units import rpm_to_rad_per_s
 
+#: The seed case: m_n 4 mm, z 24/24, b 55 mm, beta 15 deg, alpha 24 deg, n = 3.
+SEED_CASE = {"normal_module": 4.0, "teeth": (24, 24), "face_width": 55.0, "helix_angle_deg": 15.0,
+             "pressure_angle_deg": 24.0, "meshing_points": 3}
+#: Formula (27) for the seed case as the seed prints it (mm).
+SEED_FORMULA_27 = {"axial_pitch": 48.55, "convex_to_concave": 41.85, "concave_to_convex": 6.70, "face_excess": 6.45}
 #: Seed 000, Tables 1 and 2 (t1 < t2): columns concave mesh-in, concave mesh-out, convex
-#: mesh-in, convex mesh-out. Stiffness N/mm, velocity mm/s, force N (the seed's units).
+#: mesh-in, convex mesh-out. Stiffness N/mm, velocity mm/s, force in the seed's mixed unit
+#: ($\sqrt{1000}$ N, see the module docstring).
 #: (Seed 003 prints Table 1's stiffness row in another order; seed 000 has it right.)
 SEED_TABLES = {
     "stiffness": (1.8084e6, 7.685e5, 1.771e6, 7.1088e5),
     "table1": {"velocity": (61.92, 61.92, 36.33, 36.33), "force": (4.816e4, 3.1392e4, 2.796e4, 1.7715e4)},
     "table2": {"velocity": (81.57, 81.57, 60.01, 60.01), "force": (6.344e4, 4.1354e4, 4.6185e4, 2.9261e4)},
 }
-#: The seed case: m_n 4 mm, z 24/24, b 55 mm, beta 15 deg, alpha 24 deg, n = 3.
-SEED_CASE = {"normal_module": 4.0, "teeth": (24, 24), "face_width": 55.0, "helix_angle_deg": 15.0,
-             "pressure_angle_deg": 24.0, "meshing_points": 3}
+#: kg per tonne: the seed's inertias are in kg·mm², the engine's in t·mm².
+_KG_PER_T = 1000.0
 
 
-def impact_force(
+class AxialMeshing(eqx.Module):
+    """Seed 003, formulas (27)–(28) (mm).
+
+    Attributes:
+        axial_pitch: $P_x = \\pi m_n/\\sin\\beta$.
+        convex_to_concave: $q_{TA}$, axial distance from the convex-flank contact point to
+            the concave-flank contact point of the same tooth.
+        concave_to_convex: $q'_{TA} = P_x - q_{TA}$ (to the neighbouring tooth).
+        face_excess: $\\Delta b = b - P_x$.
+        condition_28: $\\Delta b < P_x - q_{TA}$, the meshing case the seed analyses
+            (three meshing points, $n = 3$).
+    """
+
+    axial_pitch: Scalar
+    convex_to_concave: Scalar
+    concave_to_convex: Scalar
+    face_excess: Scalar
+    condition_28: jnp.ndarray
+
+
+def axial_meshing(normal_module: ArrayLike, helix_angle_deg: ArrayLike, face_width: ArrayLike, rack: GBT12759Rack = GBT12759Rack()) -> AxialMeshing:
+    r"""Formula (27): $P_x = \pi m_n/\sin\beta$, $\Delta b = b - P_x$,
+
+    $$q_{TA} = \frac{0.5\pi m_n - 0.5j + 2l_a + 2e_a\cot\alpha}{\sin\beta}
+    - 2\Big(\rho_a + \frac{e_a}{\sin\alpha}\Big)\cos\alpha\sin\beta,$$
+
+    $q'_{TA} = P_x - q_{TA}$; formula (28) is the case $\Delta b < P_x - q_{TA}$. Arguments:
+    normal module (mm), helix angle (deg), face width (mm), the basic rack (multiples of $m_n$).
+    """
+    check_range("normal_module", normal_module, 0.0, 100.0, low_inclusive=False, unit="mm")
+    check_range("helix_angle_deg", helix_angle_deg, 0.0, 45.0, low_inclusive=False, high_inclusive=False, unit="deg")
+    check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
+    m = as_float(normal_module)
+    beta = as_float(helix_angle_deg) * (math.pi / 180.0)
+    b = as_float(face_width)
+    alpha = math.radians(rack.pressure_angle_deg)
+    la, ea, ra, j = (m * v for v in (rack.convex_centre_offset, rack.convex_centre_shift, rack.convex_radius, rack.backlash))
+    px = math.pi * m / jnp.sin(beta)
+    q = (0.5 * math.pi * m - 0.5 * j + 2 * la + 2 * ea / math.tan(alpha)) / jnp.sin(beta) - 2 * (
+        ra + ea / math.sin(alpha)
+    ) * math.cos(alpha) * jnp.sin(beta)
+    excess = b - px
+    return AxialMeshing(px, q, px - q, excess, excess < px - q)
+
+
+def formula7_impact_force(
     velocity: ArrayLike,
     stiffness: ArrayLike,
     meshing_points: int,
@@ -80,16 +146,28 @@ def impact_force(
     *,
     paper_units: bool = False,
 ) -> Scalar:
-    """Formula (7). Consistent units: velocity mm/s, stiffness N/mm, inertia t·mm², radii
-    mm, force N. With `paper_units=True` the inertia is in kg·mm² and the result is the
-    seed's number (labelled "paper units"; $\\sqrt{1000}$ times the force in N)."""
+    """Seed 000/003's formula (7), the meshing impact force of double-circular-arc gears,
+    $F_s = v_s/\\cos\\alpha\\,\\sqrt{K/n\\cdot J_1J_2/(J_1R_2^2 + J_2R_1^2)}$ (not the energy method
+    of `gearjax.impact.energy.impact_force`).
+
+    Args:
+        velocity: impact velocity $v_s$ (mm/s).
+        stiffness: meshing stiffness $K$ (N/mm).
+        meshing_points: number $n$ of meshing points sharing $K$.
+        inertia: $(J_1, J_2)$ on the last axis (t·mm²).
+        radius: pitch radii $(R_1, R_2)$ on the last axis (mm).
+        pressure_angle_deg: $\\alpha$ (deg).
+        paper_units: False (default): the force in N. True: the seed's number, the formula
+            evaluated with the inertia in kg·mm² (its mixed units), which is $\\sqrt{1000}$
+            times the force in N; label it "paper units".
+    """
     check_range("velocity", velocity, 0.0, None, unit="mm/s")
     check_range("stiffness", stiffness, 0.0, None, low_inclusive=False, unit="N/mm")
-    check_range("inertia", inertia, 0.0, None, low_inclusive=False)
+    check_range("inertia", inertia, 0.0, None, low_inclusive=False, unit="t·mm²")
     check_range("radius", radius, 0.0, None, low_inclusive=False, unit="mm")
     if not isinstance(meshing_points, int) or meshing_points < 1:
         raise ValueError(f"meshing_points must be an integer >= 1; got {meshing_points!r}")
-    j = as_float(inertia)
+    j = as_float(inertia) * _KG_PER_T if paper_units else as_float(inertia)
     r = as_float(radius)
     j1, j2 = j[..., 0], j[..., 1]
     r1, r2 = r[..., 0], r[..., 1]
@@ -98,18 +176,23 @@ def impact_force(
     return as_float(velocity) / jnp.cos(alpha) * jnp.sqrt(as_float(stiffness) / meshing_points * mass)
 
 
-def seed_tables(paper_units: bool = True) -> dict:
-    """Tables 1 and 2 recomputed from formula (7) for the seed case (see module docstring)."""
+def seed_tables(paper_units: bool = False) -> dict:
+    """Tables 1 and 2 recomputed from formula (7) for the seed case (module docstring): solid
+    steel discs ($\\rho$ = 7.85e-9 t/mm³) at the reference radius. Forces in N, or with
+    `paper_units=True` in the seed's mixed units (inertia then reported in kg·mm²)."""
     c = SEED_CASE
     radius = c["normal_module"] * c["teeth"][0] / (2 * math.cos(math.radians(c["helix_angle_deg"])))
-    density = 7.85e-6 if paper_units else 7.85e-9  # kg/mm^3 (paper) or t/mm^3
-    j = gear_inertia(density, c["face_width"], radius, 0.0)  # solid disc, no hub
+    j = gear_inertia(7.85e-9, c["face_width"], radius, 0.0)  # t mm^2; solid disc, no hub
     inertia = jnp.stack([j, j])
     radii = jnp.asarray([radius, radius])
-    out = {"reference_radius_mm": radius, "inertia": float(j), "units": "paper (kg mm^2, sqrt(1000) N)" if paper_units else "N"}
+    out = {
+        "reference_radius_mm": radius,
+        "inertia": float(j) * _KG_PER_T if paper_units else float(j),
+        "units": "paper (kg mm^2, sqrt(1000) N)" if paper_units else "N",
+    }
     for name in ("table1", "table2"):
         forces = [
-            float(impact_force(v, k, c["meshing_points"], inertia, radii, c["pressure_angle_deg"]))
+            float(formula7_impact_force(v, k, c["meshing_points"], inertia, radii, c["pressure_angle_deg"], paper_units=paper_units))
             for v, k in zip(SEED_TABLES[name]["velocity"], SEED_TABLES["stiffness"])
         ]
         out[name] = {"paper": list(SEED_TABLES[name]["force"]), "gearjax": forces}
@@ -126,7 +209,10 @@ STATES = (
 #: Impact velocities of the seed's tables for the four states (mm/s) and the radii they
 #: imply, PE = v_s/(omega_1 + omega_2) at 200 rpm, i = 1 (mm).
 SEED_VELOCITIES = (61.92, 81.57, 36.33, 60.01)
+#: The seed's pinion speed as it prints it (rpm) and in the engine's unit (rad/s).
 SEED_SPEED_RPM = 200.0
+SEED_PINION_SPEED = SEED_SPEED_RPM * (2.0 * math.pi / 60.0)
+#: The seed's pitch-circle error $\Delta$ (mm).
 SEED_PITCH_CIRCLE_ERROR = 0.1
 
 
@@ -217,7 +303,7 @@ def _root(state, g):
     return sol.value
 
 
-def four_state_geometry(pair, pitch_circle_error: ArrayLike) -> dict:
+def four_state_geometry(pair: DoubleArcGearPair, pitch_circle_error: ArrayLike) -> dict:
     r"""Inputs of the four-state model for a `DoubleArcGearPair` (mm): pitch radii, ratio,
     $\rho_{AV}$, $h_{jf}$, $h_k$, $r_j$, $\rho_a$, $\sin\delta_1$ and the pitch-circle error
     $\Delta = \Delta_\alpha\tan\beta$ (formula 10)."""
@@ -234,14 +320,36 @@ def four_state_geometry(pair, pitch_circle_error: ArrayLike) -> dict:
     }
 
 
-def four_state_impact(pair, pitch_circle_error: ArrayLike, speed_rpm: ArrayLike, states=(0, 1, 2, 3)) -> FourStateResult:
+def four_state_impact(
+    pair: DoubleArcGearPair,
+    pitch_circle_error: ArrayLike,
+    speed: ArrayLike | None = None,
+    *,
+    speed_rpm: ArrayLike | None = None,
+    states=(0, 1, 2, 3),
+) -> FourStateResult:
     r"""Seed 000/003's impact radius and velocity for the given states (module docstring):
-    one function of the state index, `vmap`-ed over `states`. `pitch_circle_error`
-    $\Delta > 0$ (mm) is the magnitude; its sign is the state's ($t_1 < t_2$ or $t_1 > t_2$).
-    `speed_rpm` is the pinion speed; $\omega_2 = \omega_1/i$."""
-    check_range("speed_rpm", speed_rpm, 0.0, None, low_inclusive=False, unit="rpm")
+    one function of the state index, `vmap`-ed over `states`.
+
+    Args:
+        pair: the double-circular-arc pair.
+        pitch_circle_error: $\Delta > 0$ (mm), the magnitude; its sign is the state's
+            ($t_1 < t_2$ or $t_1 > t_2$).
+        speed: pinion speed $\omega_1$ (rad/s, the engine's unit); $\omega_2 = \omega_1/i$.
+        speed_rpm: the pinion speed in rev/min instead (the seed's unit); give exactly one of
+            `speed` and `speed_rpm`.
+        states: indices into `STATES`.
+    """
+    if (speed is None) == (speed_rpm is None):
+        raise ValueError("give exactly one of speed (rad/s) and speed_rpm (rev/min); got "
+                         f"speed={speed!r}, speed_rpm={speed_rpm!r}")
+    if speed is None:
+        check_range("speed_rpm", speed_rpm, 0.0, None, low_inclusive=False, unit="rpm")
+        omega1 = rpm_to_rad_per_s(as_float(speed_rpm))
+    else:
+        check_range("speed", speed, 0.0, None, low_inclusive=False, unit="rad/s")
+        omega1 = as_float(speed)
     g = four_state_geometry(pair, pitch_circle_error)
-    omega1 = as_float(speed_rpm) * (2.0 * math.pi / 60.0)
     omega = omega1 * (1.0 + 1.0 / g["i"])
 
     def one(state):
@@ -278,7 +386,7 @@ class HandoverImpact(eqx.Module):
     radius: Array
 
 
-def handover_impacts(pair, tca) -> HandoverImpact:
+def handover_impacts(pair: DoubleArcGearPair, tca) -> HandoverImpact:
     """Hand-overs of a DCA TCA result (`tooth_contact_analysis` of a `DoubleArcGearPair`
     with an axial pitch error): wherever the binding (zone, tooth pair) changes between two
     grid positions, the new binding contact's normal line is measured from the pitch point
@@ -305,3 +413,92 @@ def handover_impacts(pair, tca) -> HandoverImpact:
         rows.append((float(tca.pinion_angle[j]), int(zone[j]), int(tca.kind[j, p, s]), te[j] - te[prev], radius))
     cols = list(zip(*rows)) if rows else [()] * 5
     return HandoverImpact(*(jnp.asarray(c) for c in cols))
+
+
+def seed_pair() -> DoubleArcGearPair:
+    """The seed case (`SEED_CASE`) as a `DoubleArcGearPair` with the recalled GB/T 12759 rack."""
+    c = SEED_CASE
+    return DoubleArcGearPair(c["teeth"], c["normal_module"], c["helix_angle_deg"], c["face_width"])
+
+
+def reproduce(cross_check: bool = False) -> dict:
+    """`gearjax reproduce dca`: formula (27)-(28) for the seed case, the four states at the
+    seed's 200 rpm and $\\Delta$ = 0.1 mm, and Tables 1-2 recomputed with formula (7) in the
+    paper's mixed units (labelled) and in N. `cross_check` adds the general TCA on the
+    generated surfaces with the same pitch error, both signs (~2 min, mostly compilation)."""
+    c = SEED_CASE
+    facts = axial_meshing(c["normal_module"], c["helix_angle_deg"], c["face_width"])
+    pair = seed_pair()
+    states = four_state_impact(pair, SEED_PITCH_CIRCLE_ERROR, SEED_PINION_SPEED)
+    omega = 2 * SEED_SPEED_RPM * 2 * math.pi / 60
+    out = {
+        "formula_27_mm": {k: {"paper": v, "gearjax": float(getattr(facts, k))} for k, v in SEED_FORMULA_27.items()},
+        "condition_28": bool(facts.condition_28),
+        "tables_paper_units": seed_tables(paper_units=True),
+        "tables_newton": seed_tables(paper_units=False),
+        "four_states": [
+            {
+                "state": name,
+                "paper_radius_mm": v / omega,
+                "radius_mm": float(states.radius[k]),
+                "exact_radius_mm": float(states.exact_radius[k]),
+                "paper_velocity_mm_per_s": v,
+                "velocity_mm_per_s": float(states.velocity[k]),
+            }
+            for k, (name, v) in enumerate(zip(STATES, SEED_VELOCITIES))
+        ],
+    }
+    if cross_check:
+        out["tca_cross_check"] = cross_check_tca(pair)
+    return out
+
+
+def cross_check_tca(pair: DoubleArcGearPair, positions_per_pitch: int = 32) -> list[dict]:
+    """First contacts of incoming pairs on the generated surfaces (general TCA) with the
+    seed's pitch-circle error, $\\Delta_\\alpha = \\mp\\Delta/\\tan\\beta$; velocities at the
+    seed's speed (mm/s)."""
+    rows = []
+    axial = SEED_PITCH_CIRCLE_ERROR / math.tan(float(pair.helix_angle))
+    omega = 2 * SEED_SPEED_RPM * 2 * math.pi / 60
+    for sign, label in ((-1.0, "t1 < t2"), (1.0, "t1 > t2")):
+        p = eqx.tree_at(lambda q: q.axial_pitch_error, pair, jnp.asarray(sign * axial))
+        tca = tooth_contact_analysis(p, accuracy=Accuracy(positions_per_pitch=positions_per_pitch))
+        h = handover_impacts(p, tca)
+        for j in range(1, len(h.radius)):  # row 0 compares the cycle's ends (TE is not periodic)
+            if float(h.pinion_angle[j]) == float(tca.pinion_angle[0]):
+                continue
+            rows.append({
+                "case": label, "zone": ZONE_NAMES[int(h.zone[j])], "kind": int(h.kind[j]),
+                "te_jump_urad": 1e6 * float(h.te_jump[j]), "radius_mm": float(h.radius[j]),
+                "velocity_mm_per_s": float(h.radius[j]) * omega,
+            })
+    return rows
+
+
+def summary(out: dict) -> str:
+    """The text report of `reproduce()`'s result."""
+    lines = ["Seeds 000/003: double circular arc gears (GB/T 12759), m_n 4, z 24/24, b 55 mm, beta 15 deg",
+             "  formula (27), mm:        paper    gearjax"]
+    for k, v in out["formula_27_mm"].items():
+        lines.append(f"  {k:20s} {v['paper']:9.2f} {v['gearjax']:10.4f}")
+    lines.append(f"  formula (28) dB < P_x - q_TA: {out['condition_28']} (three meshing points)")
+    p, si = out["tables_paper_units"], out["tables_newton"]
+    lines.append("  four-state impact radius (formulas 9-26, repaired), 200 rpm, Delta 0.1 mm:")
+    lines.append("  state                        paper PE   gearjax PE   rel.     exact (15)  v_s paper  v_s gearjax")
+    for r in out["four_states"]:
+        lines.append(
+            f"  {r['state']:27s} {r['paper_radius_mm']:9.4f} {r['radius_mm']:11.4f} {r['radius_mm'] / r['paper_radius_mm'] - 1:+8.1e}"
+            f" {r['exact_radius_mm']:11.4f} {r['paper_velocity_mm_per_s']:10.2f} {r['velocity_mm_per_s']:11.2f}"
+        )
+    if "tca_cross_check" in out:
+        lines.append("  general TCA on the generated surfaces (first contact of the incoming pair, grid-resolved):")
+        for r in out["tca_cross_check"]:
+            lines.append(
+                f"  {r['case']} {r['zone']:22s} kind {r['kind']}  TE jump {r['te_jump_urad']:+8.1f} urad"
+                f"  PE {r['radius_mm']:.4f} mm  v_s {r['velocity_mm_per_s']:.2f} mm/s"
+            )
+    lines.append("  formula (7), paper units (kg mm^2; sqrt(1000) N) | consistent units (N):")
+    for t in ("table1", "table2"):
+        for col, a, b, c in zip(("concave in", "concave out", "convex in", "convex out"), p[t]["paper"], p[t]["gearjax"], si[t]["gearjax"]):
+            lines.append(f"  {t} {col:11s} paper {a:9.5g}  gearjax {b:9.5g} ({b / a - 1:+.1e})  | {c:8.1f} N")
+    return "\n".join(lines)
