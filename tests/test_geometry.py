@@ -119,14 +119,14 @@ def test_flank_surface_is_the_involute_helicoid(seed_pair):
 
 
 def test_closed_form_normals_match_autodiff(seed_pair):
-    from gearjax.geometry._base import AbstractGearPair
+    from gearjax.geometry._base import AbstractFlankPair
 
     for gear in (0, 1):
         for s in (20.0, 35.0):
             closed = np.asarray(seed_pair.profile_normal(gear, s))
-            generic = np.asarray(AbstractGearPair.profile_normal(seed_pair, gear, s))
+            generic = np.asarray(AbstractFlankPair.profile_normal(seed_pair, gear, s))
             np.testing.assert_allclose(closed, generic, atol=1e-14)
-            frac = AbstractGearPair.transverse_normal_fraction(seed_pair, gear, s, 7.0)
+            frac = AbstractFlankPair.transverse_normal_fraction(seed_pair, gear, s, 7.0)
             assert float(frac) == pytest.approx(float(seed_pair.transverse_normal_fraction(gear, s, 7.0)), rel=1e-13)
 
 

@@ -26,7 +26,7 @@ relations to 1e-4 ($x_f = \rho_f\sin\alpha - h_k$, $l_f = l_a + (\rho_f - \rho_a
 j/2$, the heights $h_{ja} = 0.16$, $h_{jf} = 0.20$ of $A_1$ and $F_1$, $r_j$ tangent to the
 convex arc at $A_1$ through $F_1$, $r_g$ tangent to the concave arc with its bottom at
 $-h_f$); (2) seed 000/003's own impact velocities for $m_n = 4$ imply $\rho_f = 1.41$,
-$h_{jf} = 0.20$ (`gearjax.impact.double_arc`). Check them against the standard before relying
+$h_{jf} = 0.20$ (`gearjax.papers.double_arc`). Check them against the standard before relying
 on other module rows.
 """
 
