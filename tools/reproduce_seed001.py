@@ -22,7 +22,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
-from gearjax.impact import REGIMES  # noqa: E402
+from gearjax._solution import RESULTS  # noqa: E402
 from gearjax.sweep import regime_transition  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -46,7 +46,7 @@ def main(fast: bool = False) -> dict:
             "speed_rpm": rpm,
             "force_N": float(imp.force),
             "velocity_mm_per_s": float(imp.velocity),
-            "regime": REGIMES[int(imp.regime)],
+            "regime": imp.regime_name,
             "pinion_roll_length_mm": float(imp.pinion_parameter),
             "face_position_mm": float(imp.slice_z),
             "stiffness_coefficient": float(imp.stiffness.coefficient),
@@ -54,7 +54,7 @@ def main(fast: bool = False) -> dict:
             "fit_error": float(imp.stiffness.fit_error),
             "equivalent_mass_kg": float(imp.mass) * 1e3,
             "loaded_te_um": float(imp.loaded_te) * float(pair.base_radius[1]) * 1e3,
-            "converged": bool(imp.converged) and bool(imp.found),
+            "converged": bool(imp.result == RESULTS.successful),
         }
 
     table = []
