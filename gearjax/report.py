@@ -10,8 +10,9 @@ import math
 
 import numpy as np
 
+from ._solution import RESULTS, enum_message, enum_name
 from .scene import Scene, SimulationResult
-from .tca import KIND_NAMES
+from .tca import ContactKind
 from .units import UM_PER_MM, URAD_PER_RAD
 
 
@@ -36,25 +37,26 @@ def geometry_dict(scene: Scene) -> dict:
 def tca_dict(scene: Scene, result: SimulationResult) -> dict:
     tca = result.tca
     te = np.asarray(tca.transmission_error)
-    rb = _f(tca.action_radius)
-    kind = np.asarray(tca.kind)
+    rb = _f(tca.action_radius[1])
+    edge = ~np.asarray(tca.kind == ContactKind.flank)
     valid = np.asarray(tca.valid)
     pair_idx, slice_idx = (np.asarray(a) for a in tca.binding)
-    binding_kind = kind[np.arange(te.size), pair_idx, slice_idx]
+    binding_edge = edge[np.arange(te.size), pair_idx, slice_idx]
     return {
         "method": scene.accuracy.tca_method,
         "positions": int(te.size),
         "te_peak_to_peak_urad": _f(tca.te_peak_to_peak) * URAD_PER_RAD,
-        "te_peak_to_peak_um": _f(tca.te_peak_to_peak) * rb * UM_PER_MM,
+        "te_peak_to_peak_um": _f(tca.te_peak_to_peak_line) * UM_PER_MM,
         "te_mean_um": float(np.mean(te)) * rb * UM_PER_MM,
         "pinion_angle_deg": _list(tca.pinion_angle, 180.0 / math.pi),
         "te_urad": _list(te, URAD_PER_RAD),
         "te_um": _list(te, rb * UM_PER_MM),
-        "edge_contact_positions": int(np.sum(binding_kind != 0)),
+        "edge_contact_positions": int(np.sum(binding_edge)),
         "pairs": [int(k) for k in np.asarray(tca.pair_index)],
         "contact_slices_per_position": [int(v) for v in np.asarray(tca.in_contact(1e-7)).sum((1, 2))],
         "valid_slice_contacts": int(valid.sum()),
         "unconverged_solves": int(np.asarray(tca.unconverged).sum()),
+        "result": enum_name(tca.result),
     }
 
 
@@ -68,8 +70,8 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
         "extended_contact": scene.extended_contact,
         "torque_Nm": _f(ltca.torque) / 1000.0,
         "normal_load_N": float(np.mean(np.asarray(ltca.normal_load))),
-        "lte_peak_to_peak_um": _f(ltca.lte_peak_to_peak) * UM_PER_MM,
-        "lte_peak_to_peak_urad": float(np.ptp(lte)) * URAD_PER_RAD,
+        "lte_peak_to_peak_um": _f(ltca.lte_peak_to_peak_line) * UM_PER_MM,
+        "lte_peak_to_peak_urad": _f(ltca.lte_peak_to_peak) * URAD_PER_RAD,
         "lte_mean_um": float(np.mean(lte)) * rb2 * UM_PER_MM,
         "lte_um": _list(lte, rb2 * UM_PER_MM),
         "mean_mesh_stiffness_N_per_mm_um": _f(ltca.mean_mesh_stiffness),
@@ -79,6 +81,7 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
         "max_pressure_MPa": _f(ltca.max_pressure),
         "load_share_per_pair": [_list(row) for row in share.T],
         "converged": bool(np.all(np.asarray(ltca.converged))),
+        "result": enum_name(ltca.result),
     }
 
 
@@ -89,7 +92,7 @@ def impact_dict(scene: Scene, result: SimulationResult) -> dict:
         "force_N": _f(imp.force),
         "velocity_mm_per_s": _f(imp.velocity),
         "regime": imp.regime_name,
-        "contact_kind": KIND_NAMES[int(imp.kind)],
+        "contact_kind": enum_name(imp.kind),
         "point_mm": _list(imp.pinion_point),
         "gear_point_mm": _list(imp.gear_point),
         "normal": _list(imp.normal),
@@ -105,7 +108,8 @@ def impact_dict(scene: Scene, result: SimulationResult) -> dict:
         "seed_equivalent_mass_kg": _f(imp.seed_mass) * 1e3,
         "approach_um": _f(imp.approach) * UM_PER_MM,
         "kinetic_energy_J": _f(imp.kinetic_energy) * 1e-3,
-        "converged": bool(np.asarray(imp.converged)) and bool(np.asarray(imp.found)),
+        "converged": bool(np.asarray(imp.result == RESULTS.successful)),
+        "result": enum_name(imp.result),
     }
 
 
@@ -160,8 +164,8 @@ def summary(out: dict) -> str:
             f"  mean mesh stiffness  = {lt['mean_mesh_stiffness_N_per_mm_um']:.3f} N/(mm um) per face width",
             f"  max load share       = {lt['max_load_share']:.3f}, max Hertz pressure {lt['max_pressure_MPa']:.0f} MPa",
         ]
-        if not lt["converged"]:
-            lines.append("  warning: the contact solve did not converge at every position")
+        if lt["result"] != "successful":
+            lines.append(f"  warning: {enum_message(getattr(RESULTS, lt['result']))}")
     if "impact" in out:
         im = out["impact"]
         lines += [
@@ -171,8 +175,8 @@ def summary(out: dict) -> str:
             f"  point M              pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
             f"m_eq = {im['equivalent_mass_kg']:.3f} kg",
         ]
-        if not im["converged"]:
-            lines.append("  warning: the first-contact search or a contact solve did not converge")
+        if im["result"] != "successful":
+            lines.append(f"  warning: {enum_message(getattr(RESULTS, im['result']))}")
     for note in out.get("notes", []):
         lines.append(f"Note: {note}")
     return "\n".join(lines)

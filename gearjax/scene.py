@@ -264,14 +264,22 @@ def _prepare(scene: Scene) -> Scene:
     return jax.tree_util.tree_map(cast, scene)
 
 
-def simulate(scene: Scene) -> SimulationResult:
+def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     """Run the stages the scene calls for; jit-compiled once per scene structure.
 
     A float32 scene (`Accuracy.dtype`) is traced with 64-bit types switched off, so every
     constant of the program follows the requested precision.
 
+    Solver outcomes are named results (`RESULTS`) in each stage's `result` field, computed
+    in the compiled program (no host callback, so the program stays cacheable).
+
     Args:
         scene: the `Scene`.
+        throw: check the results once they are concrete: a failed LTCA or impact stage
+            raises `SimulationError` (a `RuntimeError` naming the stage, what failed and
+            how to fix it), unconverged TCA candidate solves give a `SimulationWarning`.
+            With False (or when called inside `jit`/`vmap`/`grad`, where the results are
+            traced) nothing is checked: inspect `result.<stage>.result`.
 
     Returns:
         `SimulationResult` with `tca` always and `ltca` / `impact` when requested.
@@ -279,8 +287,43 @@ def simulate(scene: Scene) -> SimulationResult:
     scene = _prepare(scene)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):
-            return _simulate(scene)
-    return _simulate(scene)
+            result = _simulate(scene)
+    else:
+        result = _simulate(scene)
+    if throw:
+        _check_results(result)
+    return result
+
+
+def _check_results(result: SimulationResult) -> None:
+    """Raise `SimulationError` for the first failed loaded stage and warn for an
+    unconverged TCA; skipped when the results are traced (inside a transformation)."""
+    import warnings
+
+    from ._solution import RESULTS, SimulationError, SimulationWarning, enum_message, enum_name
+
+    if not is_concrete(result):
+        return
+    for stage in ("tca", "ltca", "impact"):
+        stage_result = getattr(result, stage)
+        if stage_result is None:
+            continue
+        codes = stage_result.result
+        failed = np.asarray(codes != RESULTS.successful)
+        if not failed.any():
+            continue
+        names = sorted(set(np.atleast_1d(enum_name(codes))[np.atleast_1d(failed)].tolist()))
+        details = " ".join(f"[{name}] {enum_message(getattr(RESULTS, name))}" for name in names)
+        where = f" in {int(failed.sum())} of {failed.size} batch entries" if failed.ndim else ""
+        if stage == "tca":
+            text = f"simulate: the TCA stage finished with a warning{where}. {details} (throw=False skips this check.)"
+            warnings.warn(text, SimulationWarning, stacklevel=3)
+        else:
+            text = (
+                f"simulate: the {stage.upper()} stage failed{where}. {details} "
+                f"Pass throw=False to get the results with their codes (result.{stage}.result)."
+            )
+            raise SimulationError(stage, codes, text)
 
 
 @eqx.filter_jit

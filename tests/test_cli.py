@@ -47,6 +47,7 @@ def test_default_scene_json_has_the_ltca_keys(default_json):
     assert 0.5 < lt["max_load_share"] <= 1.0
     assert 5.0 < lt["mean_mesh_stiffness_N_per_mm_um"] < 40.0
     assert lt["converged"] and lt["compliance"] == "SliceCompliance"
+    assert lt["result"] == "successful" and default_json["tca"]["result"] == "successful"
 
 
 def test_default_scene_json_has_the_impact_keys(default_json):
@@ -64,7 +65,7 @@ def test_default_scene_json_has_the_impact_keys(default_json):
     # energy method: F = K delta^n at the peak approach
     k, n = im["stiffness_coefficient_N_per_mm_n"], im["stiffness_exponent"]
     assert im["force_N"] == pytest.approx(k * (im["approach_um"] * 1e-3) ** n, rel=1e-9)
-    assert im["converged"]
+    assert im["converged"] and im["result"] == "successful"
 
 
 def test_summary_is_readable(capsys):

@@ -5,12 +5,11 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 import pytest
 
 import gearjax as gj
 from gearjax.papers.curvilinear import contact_line
-from gearjax.tca import tooth_contact_analysis
+from gearjax.tca import ContactKind, tooth_contact_analysis
 
 
 def seed_pair(radius=12.0):
@@ -58,7 +57,7 @@ def test_trace_radius_near_half_face_width_stays_finite_and_conjugate(radius):
     acc = gj.Accuracy(positions_per_pitch=12, face_slices=9)
     tca = cycle(pair, acc)
     assert float(jnp.max(jnp.abs(tca.transmission_error))) < 1e-12
-    flank = tca.valid & (tca.kind == 0)
+    flank = tca.valid & (tca.kind == ContactKind.flank)
     assert bool(jnp.all(jnp.isfinite(jnp.where(flank[..., None], tca.pinion_point, 0.0))))
     # every flank contact lies on the arc s1 = r_b1 (tan a + phi - k p) - d(z) of the plane of action
     rb1 = float(pair.base_radius[0])

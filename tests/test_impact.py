@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import gearjax as gj
-from gearjax.impact import REGIMES
+from gearjax._solution import RESULTS, enum_name
+from gearjax.impact import ImpactRegime
 from gearjax.impact.closed_form import edge_contact_closed_form
 from gearjax.sweep import regime_transition
 
@@ -37,7 +38,7 @@ def impact(pair, y, torque_Nm, speed_rpm=RPM):
 
 def test_zero_load_gives_zero_velocity_and_force(seed_pair):
     imp = impact(seed_pair, PLAIN, 0.0)
-    assert bool(imp.found) and bool(imp.converged)
+    assert bool(imp.result == RESULTS.successful)
     assert abs(float(imp.velocity)) < 1e-6  # mm/s: tangential engagement of perfect flanks
     assert float(imp.force) < 1e-3
 
@@ -45,7 +46,7 @@ def test_zero_load_gives_zero_velocity_and_force(seed_pair):
 def test_unmodified_impact_is_edge_contact_growing_with_load(seed_pair):
     results = [impact(seed_pair, PLAIN, t) for t in (300.0, 800.0, 1600.0)]
     forces = [float(r.force) for r in results]
-    assert all(int(r.regime) == 1 for r in results)
+    assert all(bool(r.regime == ImpactRegime.edge) for r in results)
     assert forces[0] < forces[1] < forces[2]
     # the strike point moves up the pinion flank (from the root towards mid-flank), and
     # the first contact comes earlier
@@ -138,12 +139,12 @@ def test_general_search_agrees_with_the_closed_form_edge_equation(seed_pair):
 
 
 def test_regime_switches_from_surface_to_edge_continuously(seed_pair):
-    assert int(impact(seed_pair, PAPER, 400.0).regime) == 0
-    assert int(impact(seed_pair, PAPER, 1600.0).regime) == 1
+    assert impact(seed_pair, PAPER, 400.0).regime_name == "surface"
+    assert impact(seed_pair, PAPER, 1600.0).regime_name == "edge"
     base = scene(seed_pair, PAPER, 400.0)
     below, above = regime_transition(base, 4.0e5, 1.6e6, tolerance=1e-4)
     low, high = impact(seed_pair, PAPER, below / 1e3), impact(seed_pair, PAPER, above / 1e3)
-    assert (REGIMES[int(low.regime)], REGIMES[int(high.regime)]) == ("surface", "edge")
+    assert (low.regime_name, high.regime_name) == ("surface", "edge")
     # at the switch the flank contact has reached the gear's tip edge...
     tip = float(seed_pair.tip_roll_length[1])
     assert tip - float(low.gear_parameter) < 0.05
@@ -154,9 +155,10 @@ def test_regime_switches_from_surface_to_edge_continuously(seed_pair):
 
 def test_grad_and_vmap_on_both_sides_of_the_switch(seed_pair):
     """value_and_grad of the force, vmapped over torques with surface (400 N m) and edge
-    (1600 N m) contact, against single runs and central differences."""
+    (1600 N m) contact, against single runs and central differences; the batched regime
+    and contact kind are enumerations that name the two sides."""
 
-    def force(y, torque, speed):
+    def force_and_codes(y, torque, speed):
         s = gj.Scene(
             seed_pair,
             gj.FlankModification.from_vector(y),
@@ -165,13 +167,22 @@ def test_grad_and_vmap_on_both_sides_of_the_switch(seed_pair):
             accuracy=ACC,
             pairs=(-2, -1, 0, 1, 2),
         )
-        return gj.simulate(s).impact.force
+        imp = gj.simulate(s).impact
+        return imp.force, (imp.regime, imp.kind, imp.result)
+
+    def force(y, torque, speed):
+        return force_and_codes(y, torque, speed)[0]
 
     speed = RPM * 2 * math.pi / 60
     torques = jnp.array([4.0e5, 1.6e6])
-    values, grads = eqx.filter_jit(jax.vmap(jax.value_and_grad(force, argnums=(0, 1, 2)), (None, 0, None)))(
+    grad_fn = jax.value_and_grad(force_and_codes, argnums=(0, 1, 2), has_aux=True)
+    (values, (regime, kind, result)), grads = eqx.filter_jit(jax.vmap(grad_fn, (None, 0, None)))(
         PAPER, torques, jnp.asarray(speed)
     )
+    np.testing.assert_array_equal(np.asarray(regime == ImpactRegime.edge), [False, True])
+    assert enum_name(regime).tolist() == ["surface", "edge"]
+    assert enum_name(kind).tolist() == ["flank", "gear_tip_edge"]
+    assert enum_name(result).tolist() == ["successful", "successful"]
     primal = eqx.filter_jit(force)
     for i, torque in enumerate(torques):
         assert float(values[i]) == pytest.approx(float(primal(PAPER, torque, jnp.asarray(speed))), rel=1e-9)

@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from gearjax import Accuracy, FlankDepth, FlankModification, InvoluteGearPair, Material, MeshErrors
+from gearjax import Accuracy, FlankDepth, FlankModification, Material, MeshErrors
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.ltca import IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis
 from gearjax.ltca.solver import DEFLECTION_SCALE

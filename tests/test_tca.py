@@ -10,7 +10,7 @@ import pytest
 
 from gearjax import Accuracy, FlankDepth, FlankModification, InvoluteGearPair, MeshErrors
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.tca import pair_window, tooth_contact_analysis
+from gearjax.tca import ContactKind, pair_window, tooth_contact_analysis
 
 ACC = Accuracy(positions_per_pitch=12, face_slices=7)
 
@@ -102,7 +102,7 @@ def test_meshing_equation_with_modification_uses_the_instantaneous_ratio(seed_pa
     lever = np.stack([-(x[:, 1]), x[:, 0] - a, np.zeros(len(x))], -1)
     v_inst = v + np.asarray(slope)[:, None] * lever
     residual = np.einsum("ij,ij->i", n, v_inst) / float(seed_pair.base_radius[0])
-    flank = np.asarray(r.kind)[rows, pair_idx, slice_idx] == 0
+    flank = np.asarray(r.kind == ContactKind.flank)[rows, pair_idx, slice_idx]
     assert flank.sum() >= 4
     # the binding slice is the best of the discrete slices, so the residual is that of a
     # point a fraction of a slice from the exact peak: small, and exactly zero where the
@@ -157,8 +157,8 @@ def test_tip_relief_te_surface_agrees_with_theory_and_edge_contact_cuts_the_dip(
     # edge contact can only add first contacts: surface TE >= plane-of-action TE
     assert np.all(ts >= tp - 1e-12)
     pair_idx, slice_idx = (np.asarray(a) for a in surf.binding)
-    kind = np.asarray(surf.kind)[np.arange(angles.size), pair_idx, slice_idx]
-    flank = kind == 0
+    kind = np.asarray(surf.kind_name)[np.arange(angles.size), pair_idx, slice_idx]
+    flank = kind == "flank"
     # where the binding contact is on the flanks, both methods agree up to the second-order
     # effect of the relief slope d' (the true tangency leaves the plane of action):
     # |dTE| ~ rho_rel d'^2 / 2 with rho_rel the relative radius of curvature
@@ -168,8 +168,8 @@ def test_tip_relief_te_surface_agrees_with_theory_and_edge_contact_cuts_the_dip(
     np.testing.assert_allclose(ts[flank], tp[flank], atol=bound)
     assert np.max(np.abs(ts[flank] - tp[flank])) > 1e-4 * bound  # it is a real, not a zero, effect
     # just before phi*, the incoming pair's gear tip edge touches first (before its SAP)
-    assert np.any(kind == 1)
-    assert np.all(angles[kind == 1] <= phi_star + 1e-12)
+    assert np.any(kind == "gear_tip_edge")
+    assert np.all(angles[kind == "gear_tip_edge"] <= phi_star + 1e-12)
     # so the dip seen by the surface TCA is shallower than the plane-of-action one
     assert -dip * (1 - 1e-6) < ts.min() < 0
 
@@ -211,9 +211,9 @@ def test_base_pitch_deviation_gives_early_edge_contact(seed_pair):
     assert te.max() == pytest.approx(full, rel=1e-9)
     assert np.all(te <= full * (1 + 1e-9)) and np.all(te >= -1e-12)
     pair_idx, slice_idx = (np.asarray(a) for a in r.binding)
-    kind = np.asarray(r.kind)[np.arange(te.size), pair_idx, slice_idx]
+    kind = np.asarray(r.kind_name)[np.arange(te.size), pair_idx, slice_idx]
     # before its start of active profile it touches with the gear's tip edge, TE rising
-    early = kind == 1
+    early = kind == "gear_tip_edge"
     assert early.any()
     assert np.all((te[early] > 0) & (te[early] < full))
 
@@ -235,7 +235,7 @@ def test_plane_of_action_fast_path_is_second_order_accurate(seed_pair):
     diff_um = np.abs(np.asarray(surf.transmission_error) - np.asarray(fast.transmission_error)) * rb2 * 1e3
     assert diff_um.max() < 1e-6
     s_surf, s_fast = np.asarray(surf.separation), np.asarray(fast.separation)
-    both = np.asarray(surf.valid) & np.asarray(fast.valid) & (np.asarray(surf.kind) == 0) & (s_surf < 0.02)
+    both = np.asarray(surf.valid) & np.asarray(fast.valid) & np.asarray(surf.kind == ContactKind.flank) & (s_surf < 0.02)
     assert both.sum() > 50
     excess = s_fast[both] - s_surf[both]
     assert np.all(excess >= -1e-10)  # the exact first contact is never farther away

@@ -4,7 +4,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
 from gearjax import Accuracy, FlankDepth, FlankModification
 from gearjax.tca import pair_window, tooth_contact_analysis

@@ -74,8 +74,8 @@ fig, axes = plt.subplots(1, 2, figsize=(12, 4))
 plot.transmission_error(r, ax=axes[0])
 plot.contact_path(r, ax=axes[1], tolerance=1e-5)
 pair_idx, slice_idx = (np.asarray(a) for a in r.binding)
-kinds = np.asarray(r.kind)[np.arange(r.pinion_angle.size), pair_idx, slice_idx]
-print("binding contact kinds over the cycle:", [gj.tca.KIND_NAMES[k] for k in sorted(set(kinds))])""",
+kinds = r.kind_name[np.arange(r.pinion_angle.size), pair_idx, slice_idx]
+print("binding contact kinds over the cycle:", sorted(set(kinds.tolist())))""",
 ]
 
 
@@ -153,7 +153,7 @@ iso_scene = gj.Scene(pair, operating=gj.OperatingPoint.from_nm_rpm(1000.0), accu
 ax = None
 for name, sc in (("slice", plain), ("iso", iso_scene)):
     r = gj.simulate(sc).ltca
-    ax = plot.loaded_transmission_error(r, ax=ax, label=f"{name}: p-p {float(r.lte_peak_to_peak) * 1e3:.2f} um")""",
+    ax = plot.loaded_transmission_error(r, ax=ax, label=f"{name}: p-p {float(r.lte_peak_to_peak_line) * 1e3:.2f} um")""",
 ]
 
 
@@ -165,7 +165,7 @@ NB05 = [
     "takes the normal velocity from the real kinematics, fits the local force-approach curve "
     "$F = K_s\\delta^n$ and applies the energy method. The grid here is coarser than the "
     "default (16 positions, 9 slices) to keep the notebook quick.",
-    SETUP + "\nimport jax.numpy as jnp\nfrom gearjax.impact import REGIMES",
+    SETUP + "\nimport jax.numpy as jnp\nfrom gearjax.impact import ImpactRegime",
     """pair = gj.InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)
 acc = gj.Accuracy(positions_per_pitch=16, face_slices=9)
 paper = jnp.array([5.9, 6.8, 3800.0, 4300.0, 6.2, 4600.0]) / 1000.0   # Table 2, mm
@@ -180,7 +180,7 @@ loads = np.array([100.0, 250.0, 400.0, 600.0, 800.0, 1000.0, 1300.0, 1600.0])
 std = [impact(plain, t) for t in loads]
 mod = [impact(paper, t) for t in loads]
 for name, rows in (("standard", std), ("modified", mod)):
-    print(name, [f"{float(r.force):.0f} N ({REGIMES[int(r.regime)]})" for r in rows])""",
+    print(name, [f"{float(r.force):.0f} N ({r.regime_name})" for r in rows])""",
     "md:## Impact force against load and speed\n\nThe standard pair strikes with its tip edge at "
     "every load, harder as the load grows. The modified pair enters flank-on-flank at light "
     "load, until the deflection exceeds the reliefs and the gear's tip edge strikes again. "
@@ -204,13 +204,13 @@ axes[1].set_xlabel("pinion speed (rpm)"); axes[1].set_ylabel("F_s at 1000 N m (N
 for name, rows, m in (("standard", std, "o-"), ("modified", mod, "s-")):
     ax.plot(loads, [float(r.pinion_parameter) for r in rows], m, label=name)
     for t, r in zip(loads, rows):
-        ax.annotate(REGIMES[int(r.regime)][0], (t, float(r.pinion_parameter)), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        ax.annotate(r.regime_name[0], (t, float(r.pinion_parameter)), textcoords="offset points", xytext=(4, 4), fontsize=8)
 ax.axhline(float(pair.start_of_active_profile[0]), color="gray", ls="--", label="start of active profile")
 ax.set_xlabel("pinion torque (N m)"); ax.set_ylabel("pinion roll length of M (mm)"); ax.legend(); ax.grid(alpha=0.3)""",
     "md:## Regime map: load × relief amount\n\nThe paper's optimum scaled by a factor; "
     "edge contact (1) where the loaded approach beats the relief at the gear's tip edge.",
     """scales = np.array([0.0, 0.5, 1.0, 1.5, 2.0, 3.0])
-grid = np.array([[int(impact(paper.at[jnp.array([0, 1, 4])].multiply(s), t).regime) for t in loads] for s in scales])
+grid = np.array([[int(impact(paper.at[jnp.array([0, 1, 4])].multiply(s), t).regime == ImpactRegime.edge) for t in loads] for s in scales])
 fig, ax = plt.subplots(figsize=(6, 3.5))
 ax.imshow(grid, origin="lower", aspect="auto", cmap="coolwarm", extent=(0, len(loads), 0, len(scales)))
 ax.set_xticks(np.arange(len(loads)) + 0.5, [f"{t:.0f}" for t in loads]); ax.set_yticks(np.arange(len(scales)) + 0.5, scales)

@@ -21,7 +21,7 @@ jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 
 import gearjax as gj  # noqa: E402
-from gearjax.impact import REGIMES  # noqa: E402
+from gearjax._solution import RESULTS  # noqa: E402
 from gearjax.papers.seed001 import TABLE4_IMPACT_FORCE, paper_optimum, seed_pair  # noqa: E402
 from gearjax.sweep import regime_transition  # noqa: E402
 
@@ -45,7 +45,7 @@ def main(fast: bool = False) -> dict:
             "speed_rpm": rpm,
             "force_N": float(imp.force),
             "velocity_mm_per_s": float(imp.velocity),
-            "regime": REGIMES[int(imp.regime)],
+            "regime": imp.regime_name,
             "pinion_roll_length_mm": float(imp.pinion_parameter),
             "face_position_mm": float(imp.slice_z),
             "stiffness_coefficient": float(imp.stiffness.coefficient),
@@ -53,7 +53,7 @@ def main(fast: bool = False) -> dict:
             "fit_error": float(imp.stiffness.fit_error),
             "equivalent_mass_kg": float(imp.mass) * 1e3,
             "loaded_te_um": float(imp.loaded_te) * float(pair.base_radius[1]) * 1e3,
-            "converged": bool(imp.converged) and bool(imp.found),
+            "converged": bool(imp.result == RESULTS.successful),
         }
 
     table = []

@@ -1,6 +1,6 @@
 """Mesh-in impact: first contact under load, impact velocity, local stiffness and force."""
 
-from .analysis import REGIMES as REGIMES, ImpactResult as ImpactResult, impact_analysis as impact_analysis
+from .analysis import ImpactRegime as ImpactRegime, ImpactResult as ImpactResult, impact_analysis as impact_analysis
 from .energy import (
     equivalent_mass as equivalent_mass,
     gear_inertia as gear_inertia,

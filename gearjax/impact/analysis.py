@@ -46,28 +46,43 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from .._custom_types import Array, Bool, Float, Int, Scalar
+from .._custom_types import Array, Float, Int, Scalar
 from .._numerics import safe_divide
+from .._solution import ADJOINT, RESULTS, enum_name, enum_where, first_failure
 from ..accuracy import Accuracy
 from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis, moment_arms
-from ..tca import TCAResult, tooth_contact_analysis
+from ..tca import ContactKind, TCAResult, tooth_contact_analysis
 from .energy import equivalent_mass, gear_inertia, impact_force, seed_equivalent_mass
 from .stiffness import LocalStiffness, local_stiffness
 
-REGIMES = ("surface", "edge")
+
+class ImpactRegime(eqx.Enumeration):
+    """How the incoming pair first touches (items are pytrees: they pass `jit` and `vmap`)."""
+
+    surface = "flank on flank: the first contact is a flank point"
+    edge = "a tip edge strikes the mating flank"
 
 
 class ImpactResult(eqx.Module):
     """Mesh-in impact of the incoming tooth pair.
 
+    Units: angular transmission-error quantities are in rad (gear 2) and carry no suffix
+    (`loaded_te`); along the transverse line of action they are in mm with the suffix
+    `_line` (as `TCAResult.transmission_error_line`).
+
     Attributes:
-        found: a first contact was bracketed on the cycle grid.
-        converged: the bisection and every contact solve converged.
+        result: `RESULTS.successful`, or the first failure of the search:
+            `first_contact_not_bracketed` (no first contact on the cycle grid),
+            `first_contact_unconverged` (the bisection), `impact_contact_unconverged`
+            (the loaded contact at the first-contact position) or `stiffness_fit_failed`
+            (a solve of the local force-approach curve). The other fields are meaningful
+            only where it is successful.
         pair_index: the incoming tooth pair $k$ of the window.
         pinion_angle: $\\varphi_1^*$ at first contact (rad, cycle frame of pair $k$).
         slice_z: axial position of M (mm).
-        kind: 0 flank, 1 gear-tip edge, 2 pinion-tip edge.
-        regime: 0 surface, 1 edge (`REGIMES`).
+        kind: `ContactKind` of the first touching candidate.
+        regime: `ImpactRegime.edge` where `kind` is a tip edge, else `ImpactRegime.surface`;
+            `regime_name` gives its name.
         pinion_point, gear_point: M on each flank, fixed frame (mm).
         normal: common unit normal at M (pinion flank, fixed frame).
         pinion_parameter, gear_parameter: profile parameters of M (mm; roll lengths for
@@ -88,13 +103,12 @@ class ImpactResult(eqx.Module):
         kinetic_energy: $\\tfrac12m_{eq}v_n^2$ (N·mm).
     """
 
-    found: Bool[Array, ""]
-    converged: Bool[Array, ""]
+    result: RESULTS
     pair_index: Int[Array, ""]
     pinion_angle: Scalar
     slice_z: Scalar
-    kind: Int[Array, ""]
-    regime: Int[Array, ""]
+    kind: ContactKind
+    regime: ImpactRegime
     pinion_point: Float[Array, "3"]
     gear_point: Float[Array, "3"]
     normal: Float[Array, "3"]
@@ -117,9 +131,10 @@ class ImpactResult(eqx.Module):
     kinetic_energy: Scalar
 
     @property
-    def regime_name(self) -> str:
-        """`"surface"` or `"edge"` (needs a concrete, unbatched result)."""
-        return REGIMES[int(self.regime)]
+    def regime_name(self):
+        """`"surface"` or `"edge"`: a str, or an array of str for a batched result (needs a
+        concrete result)."""
+        return enum_name(self.regime)
 
 
 class _Context(eqx.Module):
@@ -190,6 +205,7 @@ def first_contact(ctx: _Context, column, lower, upper, lag=None):
         options=dict(lower=frozen[1], upper=frozen[2]),
         max_steps=acc.impact_max_steps,
         throw=False,
+        adjoint=ADJOINT,
     )
     return jax.lax.stop_gradient(sol.value), sol.result == optx.RESULTS.successful
 
@@ -287,7 +303,7 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     x1 = tca.pinion_point[0, column, j]
     x2 = tca.gear_point[0, column, j]
     n = tca.normal[0, column, j]
-    kind = tca.kind[0, column, j]
+    kind = jax.tree_util.tree_map(lambda v: v[0, column, j], tca.kind)
     center2 = pair.center(1)
     p_arm, q_arm = moment_arms(x1, n, center2)
     r2 = x1[:2] - center2
@@ -322,14 +338,19 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     mass = equivalent_mass(inertia, p_arm, q_arm)
     force, approach = impact_force(mass, velocity, fit.coefficient, fit.exponent)
     v = jnp.maximum(velocity, 0.0)
+    result = first_failure(
+        (~found, RESULTS.first_contact_not_bracketed),
+        (~bisected, RESULTS.first_contact_unconverged),
+        (~solved, RESULTS.impact_contact_unconverged),
+        (fit.result != RESULTS.successful, fit.result),
+    )
     return ImpactResult(
-        found=found,
-        converged=bisected & solved & fit.converged,
+        result=result,
         pair_index=jnp.asarray(ctx.pairs)[column],
         pinion_angle=phi1,
         slice_z=tca.slice_z[j],
         kind=kind,
-        regime=(kind != 0).astype(jnp.int32),
+        regime=enum_where(kind == ContactKind.flank, ImpactRegime.surface, ImpactRegime.edge),
         pinion_point=x1,
         gear_point=x2,
         normal=n,

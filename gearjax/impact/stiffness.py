@@ -23,6 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, Float, Scalar
+from .._solution import RESULTS, first_failure
 from ..accuracy import Accuracy
 from ..ltca.solver import NO_CONTACT, ContactProblem, solve_with
 
@@ -36,7 +37,8 @@ class LocalStiffness(eqx.Module):
         forces: the fitted forces (N).
         approaches: the computed approaches $\\delta$ (mm).
         fit_error: largest relative error of the fit over the fitted forces (-).
-        converged: every contact solve of the curve converged.
+        result: `RESULTS.successful`, or `RESULTS.stiffness_fit_failed` where a contact
+            solve of the curve did not converge.
     """
 
     coefficient: Scalar
@@ -44,7 +46,7 @@ class LocalStiffness(eqx.Module):
     forces: Float[Array, " fit"]
     approaches: Float[Array, " fit"]
     fit_error: Scalar
-    converged: Array
+    result: RESULTS
 
     def force(self, approach):
         """$F = K_s\\delta^n$ (N) at approach $\\delta$ (mm)."""
@@ -98,5 +100,5 @@ def local_stiffness(
         forces=forces,
         approaches=delta,
         fit_error=jnp.max(jnp.abs(fit / forces - 1.0)),
-        converged=jnp.all(converged),
+        result=first_failure((~jnp.all(converged), RESULTS.stiffness_fit_failed)),
     )

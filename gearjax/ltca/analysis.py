@@ -25,9 +25,10 @@ import jax.numpy as jnp
 
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide, safe_sqrt
+from .._solution import RESULTS, first_failure
 from ..accuracy import Accuracy
 from ..geometry.involute_section import AbstractInvolutePair
-from ..tca import TCAResult
+from ..tca import ContactKind, TCAResult
 from ..units import Material
 from .solver import NO_CONTACT, ContactProblem, solve_with
 
@@ -39,20 +40,29 @@ LTCA_FAMILIES = (AbstractInvolutePair,)
 class LTCAResult(eqx.Module):
     """Loaded contact over a mesh cycle. Axes: position, pair, slice (midpoints only).
 
+    Units: angular transmission-error quantities are in rad (gear 2) and carry no suffix;
+    the same quantity along the transverse line of action, $r_{b2}$ times the angle, is in
+    mm and carries the suffix `_line` (`transmission_error` / `transmission_error_line`,
+    `lte_peak_to_peak` / `lte_peak_to_peak_line`).
+
     Attributes:
         pinion_angle: $\\varphi_1$ (rad).
         torque: pinion torque (N·mm).
         transmission_error: loaded TE of gear 2 (rad).
         unloaded_transmission_error: TE (rad).
         rotation: extra lag $\\Theta$ of the gear under load (rad).
-        rotation_rate: $\\mathrm{d}\\Theta/\\mathrm{d}T$ (rad/(N·mm)).
+        rotation_rate: $\\mathrm{d}\\Theta/\\mathrm{d}T$ (rad/(N·mm)), or None when
+            `loaded_contact_analysis` ran with `rates=False`; the mesh-stiffness
+            properties need it and raise `ValueError` without it.
         loads: normal load of every point (N).
         gaps: loaded gaps (mm).
         pressure: maximum Hertz pressure of every point (MPa).
         converged: the contact solve converged, per position.
         pair_index, slice_z: the points' tooth pairs and axial positions (mm).
-        action_radius: $(r_{b1}, r_{b2})$ (mm).
+        action_radius: $(r_{b1}, r_{b2})$ (mm), shape (2,).
         face_width: $b$ (mm).
+        result: `RESULTS.successful`, or `RESULTS.ltca_unconverged` where the solve did
+            not converge at some position (`converged` tells which).
     """
 
     pinion_angle: Float[Array, " pos"]
@@ -60,7 +70,7 @@ class LTCAResult(eqx.Module):
     transmission_error: Float[Array, " pos"]
     unloaded_transmission_error: Float[Array, " pos"]
     rotation: Float[Array, " pos"]
-    rotation_rate: Float[Array, " pos"]
+    rotation_rate: Float[Array, " pos"] | None
     loads: Float[Array, "pos pair slice"]
     gaps: Float[Array, "pos pair slice"]
     pressure: Float[Array, "pos pair slice"]
@@ -69,6 +79,7 @@ class LTCAResult(eqx.Module):
     slice_z: Float[Array, " slice"]
     action_radius: Float[Array, "2"]
     face_width: Scalar
+    result: RESULTS
 
     @property
     def transmission_error_line(self):
@@ -77,9 +88,15 @@ class LTCAResult(eqx.Module):
 
     @property
     def lte_peak_to_peak(self):
-        """Peak-to-peak loaded TE along the line of action (mm)."""
-        lte = self.transmission_error_line
+        """Peak-to-peak angular loaded TE over the cycle (rad)."""
+        lte = self.transmission_error
         return jnp.max(lte, -1) - jnp.min(lte, -1)
+
+    @property
+    def lte_peak_to_peak_line(self):
+        """Peak-to-peak loaded TE along the line of action, $r_{b2}$ times
+        `lte_peak_to_peak` (mm)."""
+        return self.lte_peak_to_peak * self.action_radius[..., 1]
 
     @property
     def normal_load(self):
@@ -96,6 +113,14 @@ class LTCAResult(eqx.Module):
     def max_load_share(self):
         return jnp.max(self.load_share, axis=(-2, -1))
 
+    def _rate(self, name):
+        if self.rotation_rate is None:
+            raise ValueError(
+                f"LTCAResult.{name} needs rotation_rate, which was not computed: run "
+                "loaded_contact_analysis(..., rates=True) (the default)"
+            )
+        return self.rotation_rate
+
     def _stiffness(self, deflection_per_torque):
         """(T/r_b1)/(r_b2 * deflection)/b in N/(mm·um)."""
         rb1, rb2 = self.action_radius[..., 0, None], self.action_radius[..., 1, None]
@@ -104,15 +129,16 @@ class LTCAResult(eqx.Module):
     @property
     def mesh_stiffness_secant(self):
         """Secant mesh stiffness per unit face width (N/(mm·µm)); the tangent value where
-        the torque is zero."""
+        the torque is zero (so it needs `rotation_rate`)."""
+        rate = self._rate("mesh_stiffness_secant")
         per_torque = safe_divide(self.rotation, self.torque[..., None])
-        per_torque = jnp.where(self.torque[..., None] > 0, per_torque, self.rotation_rate)
+        per_torque = jnp.where(self.torque[..., None] > 0, per_torque, rate)
         return self._stiffness(per_torque)
 
     @property
     def mesh_stiffness_tangent(self):
         """Tangent mesh stiffness $\\mathrm{d}P/\\mathrm{d}\\delta$ per unit face width (N/(mm·µm))."""
-        return self._stiffness(self.rotation_rate)
+        return self._stiffness(self._rate("mesh_stiffness_tangent"))
 
     @property
     def mean_mesh_stiffness(self):
@@ -219,7 +245,7 @@ def loaded_contact_analysis(
         active_pairs: optional mask over the tooth pairs of the window; pairs outside it
             carry no load (the impact search uses it to load only the pairs already in mesh).
         rates: also compute $\\mathrm d\\Theta/\\mathrm dT$ (tangent mesh stiffness); without
-            it `rotation_rate` is NaN and the program is smaller.
+            it `rotation_rate` is None and the program is smaller.
     """
     if not isinstance(pair, LTCA_FAMILIES):
         raise ValueError(
@@ -235,7 +261,7 @@ def loaded_contact_analysis(
         weights = jnp.ones(valid.shape, dtype=tca.separation.dtype)
     else:
         weights = flank_weights(pair, tca, n_mid)
-        valid = valid & (tca.kind[..., :n_mid] == 0) & (weights > 1e-9)
+        valid = valid & (tca.kind == ContactKind.flank)[..., :n_mid] & (weights > 1e-9)
         weights = jnp.where(valid, weights, 1.0)
     with jax.named_scope("ltca_compliance"):
         points = compliance(pair, material, hub_radius, tca, n_mid, accuracy.quadrature_points, weights)
@@ -250,12 +276,12 @@ def loaded_contact_analysis(
             return solve_with(ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent), accuracy)
 
         if rates:
-            return jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
-        sol = solve(torque)
-        return sol, jax.tree_util.tree_map(lambda x: jnp.full_like(x, jnp.nan) if jnp.issubdtype(x.dtype, jnp.floating) else x, sol)
+            sol, dsol = jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
+            return sol, dsol.rotation
+        return solve(torque), None
 
     with jax.named_scope("ltca_contact"):
-        sol, dsol = jax.vmap(one)(
+        sol, rotation_rate = jax.vmap(one)(
             points.matrix, points.nonlinear, separation.reshape(n_pos, -1), p.reshape(n_pos, -1), q.reshape(n_pos, -1)
         )
     loads = sol.loads.reshape(shape)
@@ -276,7 +302,7 @@ def loaded_contact_analysis(
         transmission_error=tca.transmission_error - sol.rotation,
         unloaded_transmission_error=tca.transmission_error,
         rotation=sol.rotation,
-        rotation_rate=dsol.rotation,
+        rotation_rate=rotation_rate,
         loads=loads,
         gaps=gaps,
         pressure=pressure,
@@ -285,4 +311,5 @@ def loaded_contact_analysis(
         slice_z=tca.slice_z[..., :n_mid],
         action_radius=jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1),
         face_width=pair.face_width,
+        result=first_failure((~jnp.all(sol.converged), RESULTS.ltca_unconverged)),
     )

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .._custom_types import Array, Float, Scalar
+from .._solution import ADJOINT
 
 #: deflection scale of the complementarity equations (mm)
 DEFLECTION_SCALE = 1e-3
@@ -123,14 +124,17 @@ def solve_contact(problem: ContactProblem, *, smoothing: float, rtol: float, ato
     solver = optx.Newton(rtol=rtol, atol=atol)
 
     def stage(x, eps):
-        sol = optx.root_find(_residual, solver, x, args=(problem, eps), max_steps=max_steps, throw=False)
+        sol = optx.root_find(
+            _residual, solver, x, args=(problem, eps), max_steps=max_steps, throw=False, adjoint=ADJOINT
+        )
         return sol.value, None
 
     stages = jnp.maximum(jnp.asarray([1e-1, 1e-2, 1e-4], dtype=dtype), smoothing)
     x, _ = jax.lax.scan(stage, x, stages)
     x = jax.lax.stop_gradient(x)
     sol = optx.root_find(
-        _residual, solver, x, args=(problem, jnp.asarray(smoothing, dtype)), max_steps=max_steps, throw=False
+        _residual, solver, x, args=(problem, jnp.asarray(smoothing, dtype)), max_steps=max_steps,
+        throw=False, adjoint=ADJOINT,
     )
     fractions, rotation = sol.value[:-1], sol.value[-1] * _scale_rotation(problem)
     converged = sol.result == optx.RESULTS.successful

@@ -1,6 +1,6 @@
 """Unloaded tooth contact analysis (TCA) on the tooth-family interface."""
 
-from ._slice import KIND_NAMES as KIND_NAMES
+from ._slice import ContactKind as ContactKind
 from .analysis import (
     TCAResult as TCAResult,
     face_slices as face_slices,

@@ -19,8 +19,9 @@ flanks; the slice value is the largest valid $\Delta$ (the first feature to touc
 and flank candidates coincide when the flank contact reaches the tip, so the slice value is
 continuous, and (envelope theorem) so is its derivative with respect to the pinion angle.
 
-Every solve is `optimistix.root_find(..., Newton, ImplicitAdjoint)` with the residual at
-module level and data passed as `args`; failures are reported (`converged`), never thrown.
+Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
+`gearjax._solution` (no host callback) and the residual at module level and data passed as
+`args`; failures are reported (`converged`), never thrown.
 """
 
 from __future__ import annotations
@@ -32,11 +33,29 @@ import optimistix as optx
 
 from .._custom_types import Array, Float, Scalar
 from .._numerics import as_float, cross2, safe_divide, safe_norm
+from .._solution import ADJOINT, enum_select
 from ..geometry._base import AbstractFlankPair
 from ..geometry.depth import FlankDepth
 
-FLANK, GEAR_TIP_EDGE, PINION_TIP_EDGE = 0, 1, 2
-KIND_NAMES = ("flank", "gear_tip_edge", "pinion_tip_edge")
+
+class ContactKind(eqx.Enumeration):
+    """What touches at a slice contact (items are pytrees: they pass `jit` and `vmap`)."""
+
+    flank = "flank contact: surface to surface"
+    gear_tip_edge = "the gear's tip edge on the pinion flank"
+    pinion_tip_edge = "the pinion's tip edge on the gear flank"
+
+
+#: The three candidates of a slice in the order of their solves (rows of the one-hot
+#: selector of `_contact_residual`); `SliceContact.kind` is an index into it.
+CANDIDATES = (ContactKind.flank, ContactKind.gear_tip_edge, ContactKind.pinion_tip_edge)
+#: index of the flank candidate in `CANDIDATES`
+FLANK = 0
+
+
+def contact_kind(index) -> ContactKind:
+    """The `ContactKind` of candidate indices (integer array of any shape; traceable)."""
+    return enum_select(index, CANDIDATES)
 
 
 class SliceProblem(eqx.Module):
@@ -86,7 +105,8 @@ class SliceContact(eqx.Module):
         offset: gear offset $\\Delta$ at which the slice touches (rad); the slice's
             transmission error up to the lead correction.
         pinion_parameter, gear_parameter: $u_1$, $u_2$ of the contact (mm).
-        kind: 0 flank, 1 gear-tip edge, 2 pinion-tip edge.
+        kind: index of the touching candidate in `CANDIDATES` (0 flank, 1 gear-tip edge,
+            2 pinion-tip edge); `contact_kind` turns it into a `ContactKind`.
         valid: some candidate converged on the active flanks.
         unconverged: number of relevant candidates whose Newton solve failed (0 to 3).
     """
@@ -161,7 +181,7 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     def solve(y0, selector, relevant):
         sol = optx.root_find(
             _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
-            max_steps=max_steps, throw=False,
+            max_steps=max_steps, throw=False, adjoint=ADJOINT,
         )
         success = sol.result == optx.RESULTS.successful
         return sol.value, success & relevant, relevant & ~success

@@ -38,14 +38,20 @@ import optimistix as optx
 
 from .._custom_types import Array, Bool, Float, Int
 from .._numerics import as_float, rotate2, safe_divide
+from .._solution import RESULTS, enum_name, first_failure
 from ..accuracy import Accuracy
 from ..geometry._base import AbstractGearPair
 from ..geometry.depth import FlankDepth
-from ._slice import FLANK, KIND_NAMES, SliceContact, _contact_residual, make_problem, solve_slice
+from ._slice import FLANK, ContactKind, SliceContact, _contact_residual, contact_kind, make_problem, solve_slice
 
 
 class TCAResult(eqx.Module):
     """Unloaded contact over a mesh cycle. Axes: position, pair, slice.
+
+    Units: angular transmission-error quantities are in rad (gear 2) and carry no suffix;
+    the same quantity along the transverse line of action, $r_{b2}$ times the angle, is in
+    mm and carries the suffix `_line` (`transmission_error` / `transmission_error_line`,
+    `te_peak_to_peak` / `te_peak_to_peak_line`).
 
     Attributes:
         pinion_angle: $\\varphi_1$ (rad), shape (pos,).
@@ -57,7 +63,8 @@ class TCAResult(eqx.Module):
         slice_width: face width represented by each slice (mm; 0 for the face ends).
         slice_te: TE at which each slice would touch (rad); meaningful where `valid`.
         valid: the slice has a contact on the active flanks.
-        kind: 0 flank, 1 gear-tip edge, 2 pinion-tip edge.
+        kind: `ContactKind` of every slice contact (flank, gear_tip_edge,
+            pinion_tip_edge); compare with `==`, names by `kind_name`.
         pinion_parameter, gear_parameter: profile parameters of the contact (mm).
         pinion_point, gear_point: contact point on each flank, fixed frame (mm), with the
             gear turned to the slice's own touching position.
@@ -66,9 +73,13 @@ class TCAResult(eqx.Module):
             (mm/rad).
         separation: normal gap to the binding contact (mm); `inf` where not valid.
         transverse_normal_fraction: $|n_t|$ at the contact (converts normal to transverse).
-        action_radius: radius converting angular TE of gear 2 to line of action (mm).
+        action_radius: $(r_{b1}, r_{b2})$ (mm), shape (2,): the radii converting the
+            angles of pinion and gear to the transverse line of action (base radii for
+            involute flanks).
         unconverged: relevant candidate solves that failed, per slice (0 to 3); their
             candidates are excluded, so a non-zero count flags a possibly missed contact.
+        result: `RESULTS.successful`, or `RESULTS.tca_unconverged` where some count of
+            `unconverged` is non-zero (a warning: the other contacts are valid).
     """
 
     pinion_angle: Float[Array, " pos"]
@@ -79,7 +90,7 @@ class TCAResult(eqx.Module):
     slice_width: Float[Array, " slice"]
     slice_te: Float[Array, "pos pair slice"]
     valid: Bool[Array, "pos pair slice"]
-    kind: Int[Array, "pos pair slice"]
+    kind: ContactKind
     pinion_parameter: Float[Array, "pos pair slice"]
     gear_parameter: Float[Array, "pos pair slice"]
     pinion_point: Float[Array, "pos pair slice 3"]
@@ -88,13 +99,14 @@ class TCAResult(eqx.Module):
     relative_velocity: Float[Array, "pos pair slice 3"]
     separation: Float[Array, "pos pair slice"]
     transverse_normal_fraction: Float[Array, "pos pair slice"]
-    action_radius: Float[Array, ""]
+    action_radius: Float[Array, "2"]
     unconverged: Int[Array, "pos pair slice"]
+    result: RESULTS
 
     @property
     def transmission_error_line(self) -> Float[Array, " pos"]:
         """TE along the (transverse) line of action, $r_{b2}\\,\\mathrm{TE}$ (mm)."""
-        return self.transmission_error * self.action_radius
+        return self.transmission_error * self.action_radius[..., 1, None]
 
     @property
     def te_peak_to_peak(self) -> Float[Array, ""]:
@@ -104,7 +116,7 @@ class TCAResult(eqx.Module):
     @property
     def te_peak_to_peak_line(self) -> Float[Array, ""]:
         """Peak-to-peak TE along the line of action (mm)."""
-        return self.te_peak_to_peak * self.action_radius
+        return self.te_peak_to_peak * self.action_radius[..., 1]
 
     @property
     def binding(self) -> tuple[Int[Array, " pos"], Int[Array, " pos"]]:
@@ -117,8 +129,15 @@ class TCAResult(eqx.Module):
         """Slices whose separation is below `tolerance` (mm): the contact lines."""
         return self.valid & (self.separation <= tolerance)
 
-    def kind_name(self, kind: int) -> str:
-        return KIND_NAMES[kind]
+    @property
+    def kind_name(self):
+        """Names of `kind` ("flank", "gear_tip_edge", "pinion_tip_edge"), an array of
+        str of shape (pos, pair, slice); needs a concrete result."""
+        return enum_name(self.kind)
+
+
+def _tca_result(unconverged) -> RESULTS:
+    return first_failure((jnp.any(unconverged > 0), RESULTS.tca_unconverged))
 
 
 def positions(pair: AbstractGearPair, accuracy: Accuracy, pitches: int = 1) -> Float[Array, " pos"]:
@@ -247,12 +266,15 @@ def merge_zones(results: list[TCAResult]) -> TCAResult:
     1's (`pair_zone` tells them apart); TE is the largest of the zones' and every
     separation is re-measured from it."""
     te = jnp.max(jnp.stack([r.transmission_error for r in results]), axis=0)
-    cat = lambda name, axis: jnp.concatenate([getattr(r, name) for r in results], axis=axis)  # noqa: E731
+
+    def cat(name, axis):  # arrays and enumeration items (pytrees) alike
+        return jax.tree_util.tree_map(lambda *xs: jnp.concatenate(xs, axis=axis), *[getattr(r, name) for r in results])
+
     slice_te = cat("slice_te", -2)
     valid = cat("valid", -2)
     frac = cat("transverse_normal_fraction", -2)
     radius = results[0].action_radius
-    gap = (te[..., :, None, None] - jnp.where(valid, slice_te, 0.0)) * radius * frac
+    gap = (te[..., :, None, None] - jnp.where(valid, slice_te, 0.0)) * radius[..., 1, None, None, None] * frac
     fields = {name: cat(name, -2) for name in ("slice_te", "valid", "kind", "pinion_parameter", "gear_parameter", "unconverged")}
     fields.update({name: cat(name, -3) for name in ("pinion_point", "gear_point", "normal", "relative_velocity")})
     return TCAResult(
@@ -265,6 +287,7 @@ def merge_zones(results: list[TCAResult]) -> TCAResult:
         separation=jnp.where(valid, gap, jnp.inf),
         transverse_normal_fraction=frac,
         action_radius=radius,
+        result=_tca_result(fields["unconverged"]),
         **fields,
     )
 
@@ -452,7 +475,7 @@ def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int,
         slice_width=width,
         slice_te=slice_te,
         valid=valid,
-        kind=kind,
+        kind=contact_kind(kind),
         pinion_parameter=contact.pinion_parameter,
         gear_parameter=contact.gear_parameter,
         pinion_point=x1,
@@ -461,6 +484,7 @@ def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int,
         relative_velocity=v12,
         separation=separation,
         transverse_normal_fraction=frac,
-        action_radius=radius,
+        action_radius=jnp.stack([pair.action_radius(0), radius], -1),
         unconverged=contact.unconverged,
+        result=_tca_result(contact.unconverged),
     )

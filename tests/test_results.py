@@ -1,0 +1,139 @@
+"""Named results: enumerations through jit/vmap, solver outcomes as RESULTS codes, the
+`throw` option of `simulate`, and a compiled program without host callbacks."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import gearjax as gj
+from gearjax._solution import RESULTS, SimulationError, SimulationWarning, enum_message, enum_name
+from gearjax.ltca import IsoCompliance
+from gearjax.scene import program_text
+from gearjax.tca import ContactKind
+from gearjax.tca._slice import CANDIDATES, contact_kind
+
+TINY = gj.Accuracy(positions_per_pitch=4, face_slices=3)
+CALLBACK = "xla_ffi_python_cpu_callback"
+
+
+def test_contact_kind_names_follow_the_candidate_order_under_jit_and_vmap():
+    index = jnp.array([[0, 1, 2], [2, 2, 0]])
+    kinds = jax.jit(jax.vmap(contact_kind))(index)
+    assert enum_name(kinds).tolist() == [
+        ["flank", "gear_tip_edge", "pinion_tip_edge"],
+        ["pinion_tip_edge", "pinion_tip_edge", "flank"],
+    ]
+    np.testing.assert_array_equal(np.asarray(kinds == ContactKind.pinion_tip_edge), np.asarray(index) == 2)
+    assert [enum_name(c) for c in CANDIDATES] == ["flank", "gear_tip_edge", "pinion_tip_edge"]
+    with pytest.raises(ValueError, match="same type"):
+        _ = kinds == RESULTS.successful  # items of different enumerations never compare
+    with pytest.raises(ValueError, match="concrete"):
+        jax.jit(lambda i: jnp.asarray(len(enum_name(contact_kind(i)))))(jnp.asarray(0))
+
+
+def test_tca_kind_is_an_enumeration_matching_the_edge_contacts(spur_pair):
+    """The spur pair's cycle has tip-edge contacts of the approaching pair: the names of
+    `kind` agree with the equality masks, and every name is one of the three kinds."""
+    tca = gj.simulate(gj.Scene(spur_pair, accuracy=gj.Accuracy(positions_per_pitch=8, face_slices=3))).tca
+    names = tca.kind_name
+    assert names.shape == tca.valid.shape
+    for item in CANDIDATES:
+        np.testing.assert_array_equal(np.asarray(tca.kind == item), names == enum_name(item))
+    assert bool(tca.result == RESULTS.successful)
+    assert tca.action_radius.shape == (2,)
+    np.testing.assert_allclose(np.asarray(tca.action_radius), np.asarray(spur_pair.base_radius), rtol=1e-12)
+
+
+def _loaded(pair, **accuracy):
+    return gj.Scene(pair, gj.paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=TINY.replace(**accuracy))
+
+
+def test_unconverged_ltca_raises_with_throw_and_returns_its_code_without(seed_pair):
+    good = gj.simulate(_loaded(seed_pair)).ltca
+    assert bool(good.result == RESULTS.successful) and bool(np.all(np.asarray(good.converged)))
+    scene = _loaded(seed_pair, contact_max_steps=1)  # one Newton step cannot close the contact
+    with pytest.raises(SimulationError, match="contact_max_steps") as info:
+        gj.simulate(scene)
+    assert isinstance(info.value, RuntimeError) and info.value.stage == "ltca"
+    assert "LTCA" in str(info.value) and "throw=False" in str(info.value)
+    bad = gj.simulate(scene, throw=False).ltca
+    assert bool(bad.result == RESULTS.ltca_unconverged)
+    assert enum_name(bad.result) == "ltca_unconverged"
+    assert "contact_max_steps" in enum_message(bad.result)
+    assert not np.all(np.asarray(bad.converged))
+
+
+def test_unconverged_tca_candidates_warn_with_throw(seed_pair):
+    scene = gj.Scene(seed_pair, gj.paper_optimum(), accuracy=TINY.replace(newton_max_steps=1))
+    with pytest.warns(SimulationWarning, match="newton_max_steps"):
+        gj.simulate(scene)
+    tca = gj.simulate(scene, throw=False).tca
+    assert int(np.asarray(tca.unconverged).sum()) > 0
+    assert bool(tca.result == RESULTS.tca_unconverged)
+    assert bool(gj.simulate(gj.Scene(seed_pair, gj.paper_optimum(), accuracy=TINY)).tca.result == RESULTS.successful)
+
+
+def test_unconverged_first_contact_search_raises(seed_pair):
+    y = jnp.array([5.9, 6.8, 3800.0, 4300.0, 6.2, 4600.0]) / 1000.0
+    scene = gj.Scene(
+        seed_pair, gj.FlankModification.from_vector(y), operating=gj.OperatingPoint.from_nm_rpm(1000.0, 5000.0),
+        effects=("impact",), accuracy=gj.Accuracy(positions_per_pitch=16, face_slices=9, impact_max_steps=1),
+        pairs=(-2, -1, 0, 1, 2),
+    )
+    imp = gj.simulate(scene, throw=False).impact
+    assert bool(imp.result == RESULTS.first_contact_unconverged)
+    with pytest.raises(SimulationError, match="impact_max_steps") as info:
+        gj.simulate(scene)
+    assert info.value.stage == "impact"
+
+
+def test_throw_is_skipped_for_traced_results_and_codes_come_out_batched(seed_pair):
+    """Under an outer vmap the results are tracers: no check; one code per batch entry (at
+    zero torque the contact solve is exact, at 1000 N·m one step is not enough)."""
+    scene = _loaded(seed_pair, contact_max_steps=1)
+
+    def code(torque):
+        return gj.simulate(eqx.tree_at(lambda s: s.operating.torque, scene, torque)).ltca.result
+
+    codes = jax.vmap(code)(jnp.array([0.0, 1.0e6]))
+    assert enum_name(codes).tolist() == ["successful", "ltca_unconverged"]
+    np.testing.assert_array_equal(np.asarray(codes == RESULTS.successful), [True, False])
+
+
+def test_error_if_shows_up_as_a_callback_in_the_lowered_text():
+    """What the check below looks for: `eqx.error_if` lowers to a Python CPU callback."""
+    text = jax.jit(lambda x: eqx.error_if(x, x < 0, "negative")).lower(jnp.ones(3)).as_text()
+    assert CALLBACK in text
+
+
+@pytest.mark.parametrize(
+    "effects, compliance",
+    [
+        pytest.param((), None, id="tca"),
+        pytest.param(("ltca",), IsoCompliance(), id="ltca-iso"),
+        pytest.param(
+            ("ltca",), None, id="ltca-slice",
+            marks=pytest.mark.xfail(strict=True, reason=(
+                "gearjax/ltca/compliance.py: pasternak_compliance's lineax tridiagonal solve "
+                "(throw=True) is an error_if callback"
+            )),
+        ),
+        pytest.param(
+            ("impact",), IsoCompliance(), id="impact-iso",
+            marks=pytest.mark.xfail(strict=True, reason=(
+                "gearjax/tca/analysis.py: _peak_correction's lineax solves get tangent solves "
+                "with throw=True under the impact's jvp"
+            )),
+        ),
+    ],
+)
+def test_compiled_simulate_program_has_no_host_callback(seed_pair, effects, compliance):
+    """Solver outcomes are result codes, so the program stays cacheable by JAX's
+    persistent compilation cache (which never stores a program with a host callback)."""
+    scene = gj.Scene(
+        seed_pair, gj.paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0 if effects else None, 5000.0),
+        compliance=compliance, effects=effects, accuracy=TINY, pairs=(-2, -1, 0, 1, 2),
+    )
+    assert "callback" not in program_text(scene)
