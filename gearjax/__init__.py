@@ -13,16 +13,39 @@ from ._runtime import configure_xla_flags as _configure_xla_flags
 _configure_xla_flags()
 
 from . import units as units
+from ._solution import (
+    RESULTS as RESULTS,
+    SimulationError as SimulationError,
+    SimulationWarning as SimulationWarning,
+    enum_message as enum_message,
+    enum_name as enum_name,
+)
 from .accuracy import Accuracy as Accuracy
 from .geometry import (
+    AbstractFlankPair as AbstractFlankPair,
     AbstractGearPair as AbstractGearPair,
+    AbstractInvolutePair as AbstractInvolutePair,
     CurvilinearGearPair as CurvilinearGearPair,
+    DoubleArcGearPair as DoubleArcGearPair,
+    DoubleArcZone as DoubleArcZone,
+    GBT12759Rack as GBT12759Rack,
     InvoluteGearPair as InvoluteGearPair,
 )
 from .geometry.depth import FlankDepth as FlankDepth
 from .geometry.errors import MeshErrors as MeshErrors
-from .geometry.modification import (
-    FlankModification as FlankModification,
+from .geometry.modification import FlankModification as FlankModification
+from .impact import (
+    ImpactRegime as ImpactRegime,
+    ImpactResult as ImpactResult,
+    LocalStiffness as LocalStiffness,
+    impact_analysis as impact_analysis,
+)
+from .ltca import (
+    AbstractCompliance as AbstractCompliance,
+    IsoCompliance as IsoCompliance,
+    LTCAResult as LTCAResult,
+    SliceCompliance as SliceCompliance,
+    loaded_contact_analysis as loaded_contact_analysis,
 )
 from .scene import (
     OperatingPoint as OperatingPoint,
@@ -31,7 +54,12 @@ from .scene import (
     simulate as simulate,
     stack_scenes as stack_scenes,
 )
-from .tca import TCAResult as TCAResult, tooth_contact_analysis as tooth_contact_analysis
+from .sweep import LoadSweep as LoadSweep, load_sweep as load_sweep, regime_transition as regime_transition
+from .tca import (
+    ContactKind as ContactKind,
+    TCAResult as TCAResult,
+    tooth_contact_analysis as tooth_contact_analysis,
+)
 from .units import Material as Material
 
 __version__ = "0.1.0"

@@ -32,10 +32,9 @@ from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
 from .impact import ImpactResult, impact_analysis
-from .ltca import AbstractCompliance, LTCAResult, SliceCompliance, loaded_contact_analysis
+from .ltca import AbstractCompliance, ContactModel, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .units import Material, newton_metre_to_newton_mm, rpm_to_rad_per_s
-
 
 
 class OperatingPoint(eqx.Module):
@@ -130,23 +129,7 @@ class Scene(eqx.Module):
         if not isinstance(pair, AbstractGearPair):
             raise ValueError(f"pair must be a gear pair (e.g. InvoluteGearPair); got {type(pair).__name__}")
         operating = OperatingPoint() if operating is None else operating
-        effects = frozenset(effects)
-        unknown = effects - set(EFFECTS)
-        if unknown:
-            raise ValueError(f"effects must be a subset of {EFFECTS}; got unknown {sorted(unknown)}")
-        if operating.torque is not None:
-            effects = effects | {"ltca"}
-        if "ltca" in effects and operating.torque is None:
-            raise ValueError("effects 'ltca' needs a torque: give operating=OperatingPoint(torque=...)")
-        if "impact" in effects and operating.torque is None:
-            raise ValueError("effects 'impact' needs a torque: give operating=OperatingPoint(torque=...)")
-        unsupported = effects - pair.supported_effects
-        if unsupported:
-            raise ValueError(
-                f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}, "
-                f"which supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
-                + (f": {pair.effects_note}" if pair.effects_note else "")
-            )
+        effects = _effects(pair, operating, effects)
         if isinstance(accuracy, str):
             accuracy = Accuracy.preset(accuracy)
         if not isinstance(pitches, int) or pitches < 1:
@@ -164,43 +147,20 @@ class Scene(eqx.Module):
         self.errors = errors
         self.operating = operating
         self.material = Material() if material is None else material
-        self.compliance = SliceCompliance() if compliance is None else compliance
-        if not isinstance(self.compliance, AbstractCompliance):
-            raise ValueError(
-                "compliance must be a compliance model (an AbstractCompliance, e.g. IsoCompliance() or "
-                f"SliceCompliance()); got {type(compliance).__name__}"
-            )
-        if "ltca" in effects and not isinstance(pair, self.compliance.families):
-            raise ValueError(
-                f"compliance {type(self.compliance).__name__} models the teeth of "
-                f"{', '.join(f.__name__ for f in self.compliance.families)} only; got {type(pair).__name__}"
-            )
-        if hub_radius is None:
-            hub_radius = 0.5 * pair.root_radius
-        else:
-            hub_radius = as_float(hub_radius)
-            if hub_radius.ndim == 0 or hub_radius.shape[-1] != 2:
-                hub_radius = jnp.stack([hub_radius, hub_radius], -1)
-            check_range("hub_radius", hub_radius, 0.0, None, low_inclusive=False, unit="mm")
-            if is_concrete(hub_radius, pair.root_radius):
-                root = np.asarray(pair.root_radius)
-                if np.any(np.asarray(hub_radius) >= root):
-                    raise ValueError(
-                        f"hub_radius must be in (0, r_f) = (0, {np.min(root[..., 0]):.3f}) / (0, "
-                        f"{np.min(root[..., 1]):.3f}) mm, inside the root circles; got {np.asarray(hub_radius)}"
-                    )
-        self.hub_radius = hub_radius
-        if inertia is not None:
-            inertia = as_float(inertia)
-            if inertia.shape[-1:] != (2,):
-                raise ValueError(f"inertia must be (J1, J2) in t·mm²; got shape {inertia.shape}")
-            check_range("inertia", inertia, 0.0, None, low_inclusive=False, unit="t·mm²")
-        self.inertia = inertia
+        self.compliance = _compliance(pair, compliance, effects)
+        self.hub_radius = _hub_radius(pair, hub_radius)
+        self.inertia = _inertia(inertia)
         self.effects = effects
         self.accuracy = accuracy
         self.pairs = tuple(int(k) for k in pairs)
         self.pitches = pitches
         self.extended_contact = bool(extended_contact)
+
+    @property
+    def contact_model(self) -> ContactModel:
+        """The loaded-contact model: compliance, material, hub radii, accuracy and
+        `extended_contact` (the LTCA's, the impact's and the sweeps' common input)."""
+        return ContactModel(self.compliance, self.material, self.hub_radius, self.accuracy, self.extended_contact)
 
     @property
     def depth(self) -> FlankDepth:
@@ -224,6 +184,73 @@ def stack_scenes(scenes: list[Scene]) -> Scene:
             "and the same optional parts (modification, errors, torque) present"
         )
     return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *scenes)
+
+
+def _effects(pair: AbstractGearPair, operating: OperatingPoint, effects) -> frozenset:
+    """The scene's stages beyond the TCA: "ltca" whenever there is a torque; each one
+    checked against the torque and against the family's `supported_effects`."""
+    effects = frozenset(effects)
+    unknown = effects - set(EFFECTS)
+    if unknown:
+        raise ValueError(f"effects must be a subset of {EFFECTS}; got unknown {sorted(unknown)}")
+    if operating.torque is not None:
+        effects = effects | {"ltca"}
+    for effect in ("ltca", "impact"):
+        if effect in effects and operating.torque is None:
+            raise ValueError(f"effects '{effect}' needs a torque: give operating=OperatingPoint(torque=...)")
+    unsupported = effects - pair.supported_effects
+    if unsupported:
+        raise ValueError(
+            f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}, "
+            f"which supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
+            + (f": {pair.effects_note}" if pair.effects_note else "")
+        )
+    return effects
+
+
+def _compliance(pair: AbstractGearPair, compliance, effects: frozenset) -> AbstractCompliance:
+    """The compliance model (default `SliceCompliance()`), checked against the family."""
+    compliance = SliceCompliance() if compliance is None else compliance
+    if not isinstance(compliance, AbstractCompliance):
+        raise ValueError(
+            "compliance must be a compliance model (an AbstractCompliance, e.g. IsoCompliance() or "
+            f"SliceCompliance()); got {type(compliance).__name__}"
+        )
+    if "ltca" in effects and not isinstance(pair, compliance.families):
+        raise ValueError(
+            f"compliance {type(compliance).__name__} models the teeth of "
+            f"{', '.join(f.__name__ for f in compliance.families)} only; got {type(pair).__name__}"
+        )
+    return compliance
+
+
+def _hub_radius(pair: AbstractGearPair, hub_radius) -> jax.Array:
+    """Hub radii (mm), shape (..., 2), default half the root radii; inside the root circles."""
+    if hub_radius is None:
+        return 0.5 * pair.root_radius
+    hub_radius = as_float(hub_radius)
+    if hub_radius.ndim == 0 or hub_radius.shape[-1] != 2:
+        hub_radius = jnp.stack([hub_radius, hub_radius], -1)
+    check_range("hub_radius", hub_radius, 0.0, None, low_inclusive=False, unit="mm")
+    if is_concrete(hub_radius, pair.root_radius):
+        root = np.asarray(pair.root_radius)
+        if np.any(np.asarray(hub_radius) >= root):
+            raise ValueError(
+                f"hub_radius must be in (0, r_f) = (0, {np.min(root[..., 0]):.3f}) / (0, "
+                f"{np.min(root[..., 1]):.3f}) mm, inside the root circles; got {np.asarray(hub_radius)}"
+            )
+    return hub_radius
+
+
+def _inertia(inertia) -> jax.Array | None:
+    """$(J_1, J_2)$ (t·mm²), positive, or None."""
+    if inertia is None:
+        return None
+    inertia = as_float(inertia)
+    if inertia.shape[-1:] != (2,):
+        raise ValueError(f"inertia must be (J1, J2) in t·mm²; got shape {inertia.shape}")
+    check_range("inertia", inertia, 0.0, None, low_inclusive=False, unit="t·mm²")
+    return inertia
 
 
 def _check_modification_fits(pair, modification, gear, name):
@@ -335,16 +362,7 @@ def _simulate(scene: Scene) -> SimulationResult:
     ltca = None
     if "ltca" in scene.effects:
         with jax.named_scope("stage_ltca"):
-            ltca = loaded_contact_analysis(
-                scene.pair,
-                tca,
-                scene.operating.torque,
-                compliance=scene.compliance,
-                material=scene.material,
-                hub_radius=scene.hub_radius,
-                accuracy=scene.accuracy,
-                extended_contact=scene.extended_contact,
-            )
+            ltca = loaded_contact_analysis(scene.pair, tca, scene.operating.torque, scene.contact_model)
     impact = None
     if "impact" in scene.effects:
         with jax.named_scope("stage_impact"):
@@ -355,12 +373,8 @@ def _simulate(scene: Scene) -> SimulationResult:
                 ltca,
                 torque=scene.operating.torque,
                 speed=scene.operating.speed,
-                compliance=scene.compliance,
-                material=scene.material,
-                hub_radius=scene.hub_radius,
-                accuracy=scene.accuracy,
+                model=scene.contact_model,
                 pairs=scene.pairs,
-                extended_contact=scene.extended_contact,
                 inertia=scene.inertia,
             )
     return SimulationResult(tca=tca, ltca=ltca, impact=impact)

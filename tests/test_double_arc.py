@@ -93,7 +93,7 @@ import optimistix as optx
 
 from gearjax.geometry.depth import FlankDepth
 from gearjax.geometry.double_arc import DoubleArcGearPair
-from gearjax.papers.double_arc import SEED_VELOCITIES, four_state_impact
+from gearjax.papers.four_state import SEED_VELOCITIES, four_state_impact
 from gearjax.tca._slice import make_problem, solve_slice
 
 SEED_PAIR = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)

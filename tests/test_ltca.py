@@ -10,7 +10,7 @@ import pytest
 
 from gearjax import Accuracy, FlankDepth, FlankModification, Material, MeshErrors
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.ltca import IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis
+from gearjax.ltca import ContactModel, IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis
 from gearjax.ltca.solver import DEFLECTION_SCALE
 from gearjax.tca import pair_window, tooth_contact_analysis
 
@@ -21,8 +21,8 @@ SLICE = SliceCompliance()
 @eqx.filter_jit
 def analyse(pair, depth, torque, compliance, accuracy, pairs, extended=True):
     tca = tooth_contact_analysis(pair, depth, accuracy=accuracy, pairs=pairs)
-    ltca = loaded_contact_analysis(pair, tca, torque, compliance=compliance, material=Material(),
-                                   hub_radius=0.5 * pair.root_radius, accuracy=accuracy, extended_contact=extended)
+    model = ContactModel(compliance, Material(), 0.5 * pair.root_radius, accuracy, extended)
+    ltca = loaded_contact_analysis(pair, tca, torque, model)
     return tca, ltca
 
 

@@ -10,6 +10,7 @@ import pytest
 import gearjax as gj
 from gearjax._solution import RESULTS, SimulationError, SimulationWarning, enum_message, enum_name
 from gearjax.ltca import IsoCompliance
+from gearjax.papers.seed001 import paper_optimum
 from gearjax.scene import program_text
 from gearjax.tca import ContactKind
 from gearjax.tca._slice import CANDIDATES, contact_kind
@@ -47,7 +48,7 @@ def test_tca_kind_is_an_enumeration_matching_the_edge_contacts(spur_pair):
 
 
 def _loaded(pair, **accuracy):
-    return gj.Scene(pair, gj.paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=TINY.replace(**accuracy))
+    return gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=TINY.replace(**accuracy))
 
 
 def test_unconverged_ltca_raises_with_throw_and_returns_its_code_without(seed_pair):
@@ -66,13 +67,13 @@ def test_unconverged_ltca_raises_with_throw_and_returns_its_code_without(seed_pa
 
 
 def test_unconverged_tca_candidates_warn_with_throw(seed_pair):
-    scene = gj.Scene(seed_pair, gj.paper_optimum(), accuracy=TINY.replace(newton_max_steps=1))
+    scene = gj.Scene(seed_pair, paper_optimum(), accuracy=TINY.replace(newton_max_steps=1))
     with pytest.warns(SimulationWarning, match="newton_max_steps"):
         gj.simulate(scene)
     tca = gj.simulate(scene, throw=False).tca
     assert int(np.asarray(tca.unconverged).sum()) > 0
     assert bool(tca.result == RESULTS.tca_unconverged)
-    assert bool(gj.simulate(gj.Scene(seed_pair, gj.paper_optimum(), accuracy=TINY)).tca.result == RESULTS.successful)
+    assert bool(gj.simulate(gj.Scene(seed_pair, paper_optimum(), accuracy=TINY)).tca.result == RESULTS.successful)
 
 
 def test_unconverged_first_contact_search_raises(seed_pair):
@@ -113,27 +114,15 @@ def test_error_if_shows_up_as_a_callback_in_the_lowered_text():
     [
         pytest.param((), None, id="tca"),
         pytest.param(("ltca",), IsoCompliance(), id="ltca-iso"),
-        pytest.param(
-            ("ltca",), None, id="ltca-slice",
-            marks=pytest.mark.xfail(strict=True, reason=(
-                "gearjax/ltca/compliance.py: pasternak_compliance's lineax tridiagonal solve "
-                "(throw=True) is an error_if callback"
-            )),
-        ),
-        pytest.param(
-            ("impact",), IsoCompliance(), id="impact-iso",
-            marks=pytest.mark.xfail(strict=True, reason=(
-                "gearjax/tca/analysis.py: _peak_correction's lineax solves get tangent solves "
-                "with throw=True under the impact's jvp"
-            )),
-        ),
+        pytest.param(("ltca",), None, id="ltca-slice"),
+        pytest.param(("impact",), IsoCompliance(), id="impact-iso"),
     ],
 )
 def test_compiled_simulate_program_has_no_host_callback(seed_pair, effects, compliance):
     """Solver outcomes are result codes, so the program stays cacheable by JAX's
     persistent compilation cache (which never stores a program with a host callback)."""
     scene = gj.Scene(
-        seed_pair, gj.paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0 if effects else None, 5000.0),
+        seed_pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0 if effects else None, 5000.0),
         compliance=compliance, effects=effects, accuracy=TINY, pairs=(-2, -1, 0, 1, 2),
     )
-    assert "callback" not in program_text(scene)
+    assert CALLBACK not in program_text(scene)

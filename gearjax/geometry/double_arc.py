@@ -22,7 +22,7 @@ drive flank). $\xi_I$ is the pitch-point position on the rack when the point is 
 dedendum ("convex driving tooth", zone 0) and its concave dedendum with the gear's convex
 addendum ("concave driving tooth", zone 1), $q_{TA}$ apart along the face (formula 27).
 `DoubleArcGearPair.contact_zones()` gives one `DoubleArcZone` flank pair per zone; the
-general TCA runs on each and merges them (`gearjax.tca.analysis`).
+general TCA runs on each and merges them (`gearjax.tca.merge_zones`).
 
 **Axial pitch error** $\Delta_\alpha = t_1 - t_2$ (seed's section 2.1): the gear's lead is made
 with axial pitch $t_2 = P_x - \Delta_\alpha$ (pinion nominal), transverse profiles unchanged.

@@ -49,8 +49,8 @@ import optimistix as optx
 from .._custom_types import Array, Float, Int, Scalar
 from .._numerics import safe_divide
 from .._solution import ADJOINT, RESULTS, enum_name, enum_where, first_failure
-from ..accuracy import Accuracy
 from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis, moment_arms
+from ..ltca.model import ContactModel
 from ..tca import ContactKind, TCAResult, tooth_contact_analysis
 from .energy import equivalent_mass, gear_inertia, impact_force, seed_equivalent_mass
 from .stiffness import LocalStiffness, local_stiffness
@@ -143,60 +143,43 @@ class _Context(eqx.Module):
     pair: eqx.Module
     depth: eqx.Module
     torque: Scalar
-    compliance: eqx.Module
-    material: eqx.Module
-    hub_radius: Array
-    accuracy: Accuracy = eqx.field(static=True)
+    model: ContactModel
     pairs: tuple[int, ...] = eqx.field(static=True)
-    extended_contact: bool = eqx.field(static=True)
 
 
-def _single(ctx: _Context, phi1, column, lag):
-    """TCA at one pinion angle, the loaded TE of the pairs other than `column` (or the
-    constant `-lag` when given) and the incoming pair's first-touching slice."""
-    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=ctx.accuracy, pairs=ctx.pairs, pinion_angles=phi1[None])
-    if lag is None:
-        active = jnp.arange(len(ctx.pairs)) != column
-        ltca = loaded_contact_analysis(
-            ctx.pair,
-            tca,
-            ctx.torque,
-            compliance=ctx.compliance,
-            material=ctx.material,
-            hub_radius=ctx.hub_radius,
-            accuracy=ctx.accuracy,
-            extended_contact=ctx.extended_contact,
-            active_pairs=active,
-            rates=False,
-        )
-        lte, solved = ltca.transmission_error[0], ltca.converged[0]
-    else:
-        lte, solved = -jnp.asarray(lag, phi1.dtype), jnp.asarray(True)
+def _single(ctx: _Context, phi1, column):
+    """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
+    incoming pair's first-touching slice."""
+    tca = tooth_contact_analysis(
+        ctx.pair, ctx.depth, accuracy=ctx.model.accuracy, pairs=ctx.pairs, pinion_angles=phi1[None]
+    )
+    active = jnp.arange(len(ctx.pairs)) != column
+    ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
-    return (offsets[j], lte), (tca, j, solved)
+    return (offsets[j], ltca.transmission_error[0]), (tca, j, ltca.converged[0])
 
 
 def _gap(phi1, args):
-    ctx, column, lag = args
-    (te, lte), _ = _single(ctx, phi1, column, lag)
+    ctx, column = args
+    (te, lte), _ = _single(ctx, phi1, column)
     return te - lte
 
 
-def first_contact(ctx: _Context, column, lower, upper, lag=None):
+def first_contact(ctx: _Context, column, lower, upper):
     """Bisection for $H(\\varphi_1) = 0$ on `[lower, upper]` (H(lower) < 0 <= H(upper)),
     then the implicit-function correction that carries the gradients. Returns
     `(phi1, converged)`."""
     dtype = jnp.result_type(lower)
     eps = float(jnp.finfo(dtype).eps)
-    acc = ctx.accuracy
+    acc = ctx.model.accuracy
     atol = max(acc.newton_atol, 64 * eps)
     rtol = max(acc.newton_rtol, 16 * eps)
     solver = optx.Bisection(rtol=rtol, atol=atol, flip=False)
     frozen = jax.tree_util.tree_map(
         lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, (ctx, lower, upper)
     )
-    args = (frozen[0], column, lag)
+    args = (frozen[0], column)
     sol = optx.root_find(
         _gap,
         solver,
@@ -236,12 +219,8 @@ def impact_analysis(
     *,
     torque,
     speed,
-    compliance,
-    material,
-    hub_radius,
-    accuracy: Accuracy,
+    model: ContactModel,
     pairs: tuple[int, ...],
-    extended_contact: bool = True,
     inertia=None,
 ) -> ImpactResult:
     """Mesh-in impact of the pair coming into mesh (see the module docstring).
@@ -251,39 +230,39 @@ def impact_analysis(
         tca, ltca: the scene's unloaded and loaded contact over the cycle.
         torque: pinion torque (N·mm).
         speed: pinion speed $\\omega_1$ (rad/s).
-        compliance, material, hub_radius: as for the LTCA.
-        accuracy: settings (bisection, fit).
+        model: the loaded-contact model, as for the LTCA (`ContactModel`; its accuracy
+            also sets the bisection and the stiffness fit).
         pairs: the tooth-pair window of `tca` (static).
-        extended_contact: as for the LTCA.
         inertia: $(J_1, J_2)$ of the rotating assemblies (t·mm²); default the solid discs
             $\\pi\\rho b(r_b^4 - r_h^4)/2$.
     """
     pair = pair.resolve()
-    ctx = _Context(pair, depth, jnp.asarray(torque, ltca.rotation.dtype), compliance, material, hub_radius,
-                   accuracy, tuple(pairs), extended_contact)
+    ctx = _Context(pair, depth, jnp.asarray(torque, ltca.rotation.dtype), model, tuple(pairs))
     found, column, lower, upper = _bracket(tca, ltca)
     root, bisected = first_contact(ctx, column, lower, upper)
     return _impact_at(ctx, column, root, speed, inertia, found, bisected)
 
 
-def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag=None) -> ImpactResult:
-    pair, acc = ctx.pair, ctx.accuracy
-    n_mid = acc.face_slices
+def _follow_root(ctx: _Context, column, root):
+    """Everything at the first contact `root`, continued so that it carries the gradients
+    of $\\varphi_1^*$: returns `(phi1, (te, lte, tca, dte, dlte), j, solved)`.
+
+    One forward-mode evaluation at the root gives the values, their rates along
+    $\\varphi_1$, and (implicit function theorem) the gradients of $\\varphi_1^*$:
+    $\\mathrm d\\varphi_1^*/\\mathrm d\\theta = -H_\\theta/H_\\varphi$. Every output $Q$ is
+    continued as $Q + Q'\\,\\text{shift}$, where `shift` is zero in value and carries those
+    gradients. Second order as well: the impact velocity contains the rates, and their own
+    change along $\\varphi_1$ enters its gradient through $\\varphi_1^*$.
+    """
 
     def evaluate(p):
-        (te, lte), (tca, j, solved) = _single(ctx, p, column, lag)
+        (te, lte), (tca, j, solved) = _single(ctx, p, column)
         return (te, lte, tca), (j, solved)
 
-    # One forward-mode evaluation at the root gives the values, their rates along phi1, and
-    # (implicit function theorem) the gradients of phi* = root: d(phi*)/d(theta) =
-    # -H_theta/H_phi. Every output Q is continued as Q + Q' * shift, where `shift` is zero
-    # in value and carries those gradients.
     def with_rates(p):
         (te, lte, tca), (dte, dlte, _), aux = jax.jvp(evaluate, (p,), (jnp.ones_like(p),), has_aux=True)
         return (te, lte, tca, dte, dlte), aux
 
-    # Second order as well: the impact velocity contains the rates, and their own change
-    # along phi1 enters its gradient through phi*.
     values, tangents, (j, solved) = jax.jvp(with_rates, (root,), (jnp.ones_like(root),), has_aux=True)
     te, lte, _, dte, dlte = values
     h = te - lte
@@ -291,17 +270,43 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     eps = float(jnp.finfo(root.dtype).eps)
     steep = jnp.abs(slope) > 1e3 * eps
     shift = -jnp.where(steep, safe_divide(h - jax.lax.stop_gradient(h), slope), 0.0)
-    phi1 = root + shift
 
     def follow(x, dx):
         if eqx.is_inexact_array(x):
             return x + jax.lax.stop_gradient(dx) * shift
         return x
 
-    te, lte, tca, dte, dlte = jax.tree_util.tree_map(follow, values, tangents)
+    return root + shift, jax.tree_util.tree_map(follow, values, tangents), j, solved
 
+
+def _local_fit(ctx: _Context, tca: TCAResult, column, p_arm) -> LocalStiffness:
+    """Local stiffness $F = K_s\\delta^n$ of the incoming pair alone, from its
+    first-contact configuration, loaded up to the static normal load (at least 10 N per mm
+    of face width)."""
+    pair, acc = ctx.pair, ctx.model.accuracy
+    n_mid = acc.face_slices
+    model = ctx.model
+    points = model.compliance(pair, model.material, model.hub_radius, tca, n_mid, acc.quadrature_points,
+                              jnp.ones(tca.valid[..., :n_mid].shape, p_arm.dtype))
+    idx = column * n_mid + jnp.arange(n_mid)
+    matrix = points.matrix[0][idx][:, idx]
+    nonlinear = points.nonlinear[0][idx]
+    _, q_all = _levers(tca, n_mid, pair.center(1))
+    # Separations count from the first touching cell midpoint: a face-end M (width 0) has
+    # no compliance of its own, and an offset at the start would spoil the power law.
+    slice_te = tca.slice_te[0, column, :n_mid]
+    valid = tca.valid[0, column, :n_mid]
+    first = jnp.max(jnp.where(valid, slice_te, -jnp.inf))
+    separation = jnp.maximum(q_all[0, column] * (first - jnp.where(valid, slice_te, first)), 0.0)
+    normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
+    reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
+    return local_stiffness(matrix, nonlinear, points.exponent, separation, valid, reference, acc)
+
+
+def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected) -> ImpactResult:
+    pair = ctx.pair
+    phi1, (te, lte, tca, dte, dlte), j, solved = _follow_root(ctx, column, root)
     x1 = tca.pinion_point[0, column, j]
-    x2 = tca.gear_point[0, column, j]
     n = tca.normal[0, column, j]
     kind = jax.tree_util.tree_map(lambda v: v[0, column, j], tca.kind)
     center2 = pair.center(1)
@@ -311,28 +316,11 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
     gear_extra = jnp.stack([r2[1], -r2[0], jnp.zeros_like(r2[0])])  # (-e_z) x r2
     v12 = speed * (tca.relative_velocity[0, column, j] - dlte * gear_extra)
     velocity = jnp.dot(v12, n)
-    gap_velocity = speed * q_arm * (dte - dlte)
+    fit = _local_fit(ctx, tca, column, p_arm)
 
-    # Local stiffness of the incoming pair alone, from its first-contact configuration.
-    points = ctx.compliance(pair, ctx.material, ctx.hub_radius, tca, n_mid, acc.quadrature_points,
-                            jnp.ones(tca.valid[..., :n_mid].shape, te.dtype))
-    idx = column * n_mid + jnp.arange(n_mid)
-    matrix = points.matrix[0][idx][:, idx]
-    nonlinear = points.nonlinear[0][idx]
-    _, q_all = _levers(tca, n_mid, center2)
-    # Separations count from the first touching cell midpoint: a face-end M (width 0) has
-    # no compliance of its own, and an offset at the start would spoil the power law.
-    slice_te = tca.slice_te[0, column, :n_mid]
-    valid = tca.valid[0, column, :n_mid]
-    first = jnp.max(jnp.where(valid, slice_te, -jnp.inf))
-    separation = jnp.maximum(q_all[0, column] * (first - jnp.where(valid, slice_te, first)), 0.0)
-    normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
-    reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
-    fit = local_stiffness(matrix, nonlinear, points.exponent, separation, valid, reference, acc)
-
-    radii = jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1)
+    radii = pair.action_radii()
     if inertia is None:
-        inertia = gear_inertia(ctx.material.density, pair.face_width, radii, ctx.hub_radius)
+        inertia = gear_inertia(ctx.model.material.density, pair.face_width, radii, ctx.model.hub_radius)
     else:
         inertia = jnp.asarray(inertia, te.dtype)
     mass = equivalent_mass(inertia, p_arm, q_arm)
@@ -352,7 +340,7 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
         kind=kind,
         regime=enum_where(kind == ContactKind.flank, ImpactRegime.surface, ImpactRegime.edge),
         pinion_point=x1,
-        gear_point=x2,
+        gear_point=tca.gear_point[0, column, j],
         normal=n,
         pinion_parameter=tca.pinion_parameter[0, column, j],
         gear_parameter=tca.gear_parameter[0, column, j],
@@ -361,7 +349,7 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected, lag
         lte_slope=dlte,
         relative_velocity=v12,
         velocity=velocity,
-        gap_closing_velocity=gap_velocity,
+        gap_closing_velocity=speed * q_arm * (dte - dlte),
         pinion_arm=p_arm,
         gear_arm=q_arm,
         inertia=inertia,

@@ -7,5 +7,6 @@ from .compliance import (
     PointCompliance as PointCompliance,
     SliceCompliance as SliceCompliance,
 )
+from .model import ContactModel as ContactModel
 from .iso import IsoStiffness as IsoStiffness, iso_mesh_stiffness as iso_mesh_stiffness
 from .solver import ContactProblem as ContactProblem, ContactSolution as ContactSolution, solve_contact as solve_contact

@@ -26,10 +26,10 @@ import jax.numpy as jnp
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide, safe_sqrt
 from .._solution import RESULTS, first_failure
-from ..accuracy import Accuracy
 from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import ContactKind, TCAResult
 from ..units import Material
+from .model import ContactModel
 from .solver import NO_CONTACT, ContactProblem, solve_with
 
 #: Families the LTCA supports: line contact of involute sections, whose transverse radius
@@ -219,12 +219,8 @@ def loaded_contact_analysis(
     pair,
     tca: TCAResult,
     torque,
+    model: ContactModel,
     *,
-    compliance,
-    material: Material,
-    hub_radius,
-    accuracy: Accuracy,
-    extended_contact: bool = True,
     active_pairs: Bool[Array, " pair"] | None = None,
     rates: bool = True,
 ) -> LTCAResult:
@@ -234,14 +230,12 @@ def loaded_contact_analysis(
         pair: the gear pair, of a family in `LTCA_FAMILIES` (involute sections).
         tca: its unloaded contact (`tooth_contact_analysis`).
         torque: pinion torque (N·mm), scalar; `vmap` for several loads.
-        compliance: a compliance model (`IsoCompliance`, `SliceCompliance`).
-        material: both gears' material.
-        hub_radius: inner radius of each gear body (mm), shape (2,).
-        accuracy: settings (`face_slices`, `contact_smoothing`, ...).
-        extended_contact: let loaded teeth also touch by their tip edges beyond the active
-            profile (the TCA's edge contacts; physical default). False keeps the classic
-            model: flank contacts only, each slice weighted by the fraction of its cell on
-            the active flanks (`flank_weights`).
+        model: compliance, material, hub radii, accuracy and `extended_contact`
+            (`ContactModel`; `Scene.contact_model`). With `extended_contact` loaded teeth
+            also touch by their tip edges beyond the active profile (the TCA's edge
+            contacts; physical default); without it the classic model: flank contacts
+            only, each slice weighted by the fraction of its cell on the active flanks
+            (`flank_weights`).
         active_pairs: optional mask over the tooth pairs of the window; pairs outside it
             carry no load (the impact search uses it to load only the pairs already in mesh).
         rates: also compute $\\mathrm d\\Theta/\\mathrm dT$ (tangent mesh stiffness); without
@@ -253,49 +247,17 @@ def loaded_contact_analysis(
             f"(line contact of involute sections); got {type(pair).__name__}"
         )
     pair = pair.resolve()
-    n_mid = accuracy.face_slices
-    valid = tca.valid[..., :n_mid]
-    if active_pairs is not None:
-        valid = valid & active_pairs[:, None]
-    if extended_contact:
-        weights = jnp.ones(valid.shape, dtype=tca.separation.dtype)
-    else:
-        weights = flank_weights(pair, tca, n_mid)
-        valid = valid & (tca.kind == ContactKind.flank)[..., :n_mid] & (weights > 1e-9)
-        weights = jnp.where(valid, weights, 1.0)
+    n_mid = model.accuracy.face_slices
+    valid, weights = _loaded_slices(pair, tca, model, active_pairs)
     with jax.named_scope("ltca_compliance"):
-        points = compliance(pair, material, hub_radius, tca, n_mid, accuracy.quadrature_points, weights)
-    shape = valid.shape
-    separation = jnp.where(valid, tca.separation[..., :n_mid], NO_CONTACT)
-    p, q = _levers(tca, n_mid, pair.center(1))
-    n_pos = shape[0]
-    torque = jnp.asarray(torque, dtype=separation.dtype)
-
-    def one(matrix, nonlinear, e, pa, qa):
-        def solve(t):
-            return solve_with(ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent), accuracy)
-
-        if rates:
-            sol, dsol = jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
-            return sol, dsol.rotation
-        return solve(torque), None
-
-    with jax.named_scope("ltca_contact"):
-        sol, rotation_rate = jax.vmap(one)(
-            points.matrix, points.nonlinear, separation.reshape(n_pos, -1), p.reshape(n_pos, -1), q.reshape(n_pos, -1)
+        points = model.compliance(
+            pair, model.material, model.hub_radius, tca, n_mid, model.accuracy.quadrature_points, weights
         )
-    loads = sol.loads.reshape(shape)
-    gaps = sol.gaps.reshape(shape)
-
-    # Hertz pressure of each slice (line contact, normal section); the roll lengths are
-    # the involutes' radii of curvature.
-    frac = tca.transverse_normal_fraction[..., :n_mid]
-    length = tca.slice_width[..., :n_mid] / frac
-    curvature = frac * (1.0 / tca.pinion_parameter[..., :n_mid] + 1.0 / tca.gear_parameter[..., :n_mid])
-    e_star = material.youngs_modulus / (2 * (1 - material.poisson_ratio**2))
-    pressure = safe_sqrt(jnp.maximum(loads, 0.0) / (length * weights) * e_star * curvature / jnp.pi)
-    pressure = jnp.where(valid, pressure, 0.0)
-
+    separation = jnp.where(valid, tca.separation[..., :n_mid], NO_CONTACT)
+    torque = jnp.asarray(torque, dtype=separation.dtype)
+    with jax.named_scope("ltca_contact"):
+        sol, rotation_rate = _solve_positions(points, separation, _levers(tca, n_mid, pair.center(1)), torque, model, rates)
+    loads = sol.loads.reshape(valid.shape)
     return LTCAResult(
         pinion_angle=tca.pinion_angle,
         torque=torque,
@@ -304,12 +266,57 @@ def loaded_contact_analysis(
         rotation=sol.rotation,
         rotation_rate=rotation_rate,
         loads=loads,
-        gaps=gaps,
-        pressure=pressure,
+        gaps=sol.gaps.reshape(valid.shape),
+        pressure=jnp.where(valid, hertz_pressure(tca, loads, weights, model.material, n_mid), 0.0),
         converged=sol.converged,
         pair_index=tca.pair_index,
         slice_z=tca.slice_z[..., :n_mid],
-        action_radius=jnp.stack([pair.action_radius(0), pair.action_radius(1)], -1),
+        action_radius=pair.action_radii(),
         face_width=pair.face_width,
         result=first_failure((~jnp.all(sol.converged), RESULTS.ltca_unconverged)),
     )
+
+
+def _loaded_slices(pair, tca: TCAResult, model: ContactModel, active_pairs):
+    """Which slice contacts may carry load, (pos, pair, slice), and the length of contact
+    line each stands for in units of its cell (`flank_weights`, or 1 with
+    `extended_contact`)."""
+    n_mid = model.accuracy.face_slices
+    valid = tca.valid[..., :n_mid]
+    if active_pairs is not None:
+        valid = valid & active_pairs[:, None]
+    if model.extended_contact:
+        return valid, jnp.ones(valid.shape, dtype=tca.separation.dtype)
+    weights = flank_weights(pair, tca, n_mid)
+    valid = valid & (tca.kind == ContactKind.flank)[..., :n_mid] & (weights > 1e-9)
+    return valid, jnp.where(valid, weights, 1.0)
+
+
+def _solve_positions(points, separation, levers, torque, model: ContactModel, rates: bool):
+    """The contact problem of every position (vmapped), and $\\mathrm d\\Theta/\\mathrm dT$
+    by forward differentiation when `rates`."""
+    n_pos = separation.shape[0]
+    p, q = (lever.reshape(n_pos, -1) for lever in levers)
+
+    def one(matrix, nonlinear, e, pa, qa):
+        def solve(t):
+            return solve_with(ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent), model.accuracy)
+
+        if rates:
+            sol, dsol = jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
+            return sol, dsol.rotation
+        return solve(torque), None
+
+    return jax.vmap(one)(points.matrix, points.nonlinear, separation.reshape(n_pos, -1), p, q)
+
+
+def hertz_pressure(tca: TCAResult, loads, weights, material: Material, n_mid: int):
+    """Maximum Hertz pressure of each slice (MPa), line contact in the normal section:
+    $p_0 = \\sqrt{wE^*/(\\pi R')}$, $w$ the load per unit length of contact line,
+    $1/E^* = 2(1-\\nu^2)/E$, $1/R' = |n_t|(1/s_1 + 1/s_2)$ with the roll lengths $s_i$,
+    the involutes' radii of curvature."""
+    frac = tca.transverse_normal_fraction[..., :n_mid]
+    length = tca.slice_width[..., :n_mid] / frac
+    curvature = frac * (1.0 / tca.pinion_parameter[..., :n_mid] + 1.0 / tca.gear_parameter[..., :n_mid])
+    e_star = material.youngs_modulus / (2 * (1 - material.poisson_ratio**2))
+    return safe_sqrt(jnp.maximum(loads, 0.0) / (length * weights) * e_star * curvature / jnp.pi)

@@ -21,7 +21,7 @@ $\Delta z$ over $\Delta z/|n_t|$.
   Neighbouring slices of a tooth are coupled by a shear (Pasternak) layer: the tooth's
   stiffness matrix is $K = \mathrm{diag}(k_j\Delta z) + k_cT$, $T = \mathrm{tridiag}(-1, 2, -1)$
   with free ends, $k_c = \bar k\lambda^2/\Delta z$, and its compliance $K^{-1}$ (solved with
-  lineax's tridiagonal solver). A point load then spreads along the face with the decay
+  JAX's tridiagonal solver). A point load then spreads along the face with the decay
   length $\lambda$ (influence $\propto e^{-|y|/\lambda}$) while a uniform load is carried as
   without coupling, so the mean stiffness is unaffected and the face ends come out about
   twice as compliant. This is the Winkler-plus-shear-layer model of Ajmi & Velex (2005,
@@ -38,7 +38,6 @@ import equinox as eqx
 from equinox import AbstractClassVar
 import jax
 import jax.numpy as jnp
-import lineax as lx
 
 from .._custom_types import Array, Float
 from .._validate import check_choice, check_range
@@ -132,7 +131,7 @@ def pasternak_compliance(compliance_per_width, slice_width, decay_length):
 
     $K = \\mathrm{diag}(k_j\\Delta z) + k_cT$, $k_j = 1/c_j$, $k_c = \\bar k\\lambda^2/\\Delta z$,
     $T = \\mathrm{tridiag}(-1, 2, -1)$ with free ends ($T_{11} = T_{nn} = 1$); returns
-    $K^{-1}$ column by column with lineax's tridiagonal solver.
+    $K^{-1}$ by a tridiagonal solve of the identity.
 
     Args:
         compliance_per_width: $c_j$ of each slice (mm²/N), shape (n,).
@@ -146,9 +145,12 @@ def pasternak_compliance(compliance_per_width, slice_width, decay_length):
     ends = jnp.zeros(n, dtype=c.dtype).at[0].set(1.0).at[-1].set(1.0)
     diag = k * slice_width + kc * (2.0 - ends)
     off = -kc * jnp.ones(n - 1, dtype=c.dtype)
-    operator = lx.TridiagonalLinearOperator(diag, off, off)
-    basis = jnp.eye(n, dtype=c.dtype)
-    return jax.vmap(lambda e: lx.linear_solve(operator, e, lx.Tridiagonal()).value, out_axes=1)(basis)
+    lower = jnp.concatenate([jnp.zeros(1, c.dtype), off])
+    upper = jnp.concatenate([off, jnp.zeros(1, c.dtype)])
+    # JAX's tridiagonal solver (Thomas algorithm) on all columns of the identity at once:
+    # differentiable, and free of lineax's error checks (host callbacks, which would keep
+    # the program out of the compilation cache).
+    return jax.lax.linalg.tridiagonal_solve(lower, diag, upper, jnp.eye(n, dtype=c.dtype))
 
 
 class SliceCompliance(AbstractCompliance):

@@ -3,8 +3,8 @@ reproductions that set gearjax's results beside them.
 
 * `seed001`: mesh-in impact of involute helical gears (the 29/71 case, its optimal
   modification `paper_optimum`, Table 4, the note on its centre distance).
-* `double_arc`: seeds 000/003, double-circular-arc gears (formulas (7) and (27)–(28), the
-  four-state impact model, Tables 1–2, `gearjax reproduce dca`).
+* `double_arc`: seeds 000/003, double-circular-arc gears (formulas (7) and (27)–(28),
+  Tables 1–2, `gearjax reproduce dca`); `four_state`: their four-state impact model.
 * `curvilinear`: seed 002, involute curvilinear-tooth gears (`gearjax reproduce curvilinear`).
 
 The rule: this package imports the core (geometry, tca, ltca, impact, ...); nothing in the
@@ -13,4 +13,9 @@ core imports it. Only presentation (`gearjax.cli`, notebooks, tools) may. A pape
 (`speed_rpm=`, `paper_units=True`); every function takes the engine's units by default.
 """
 
-from . import curvilinear as curvilinear, double_arc as double_arc, seed001 as seed001
+from . import (
+    curvilinear as curvilinear,
+    double_arc as double_arc,
+    four_state as four_state,
+    seed001 as seed001,
+)

@@ -1,0 +1,65 @@
+"""The discretisation of a TCA: pinion positions, face slices and the tooth-pair window."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import numpy as np
+import jax.numpy as jnp
+
+from .._custom_types import Array, Float
+from .._numerics import as_float
+from ..accuracy import Accuracy
+from ..geometry._base import AbstractGearPair
+
+
+def positions(pair: AbstractGearPair, accuracy: Accuracy, pitches: int = 1) -> Float[Array, " pos"]:
+    """Pinion angles (rad): `positions_per_pitch` per angular pitch, centred on 0."""
+    n = accuracy.positions_per_pitch * pitches
+    step = pair.angular_pitch(0) / accuracy.positions_per_pitch
+    start = -0.5 * pitches * pair.angular_pitch(0)
+    return as_float(start + step * np.arange(n))
+
+
+def face_slices(pair: AbstractGearPair, accuracy: Accuracy) -> tuple[Array, Array]:
+    """Slice positions (midpoints, then the two face ends) and the width each represents."""
+    n = accuracy.face_slices
+    b = pair.face_width
+    fractions = (np.arange(n) + 0.5) / n - 0.5
+    z = jnp.concatenate([b[..., None] * fractions, jnp.stack([-0.5 * b, 0.5 * b], -1)], -1)
+    width = jnp.concatenate([jnp.broadcast_to(b[..., None] / n, b.shape + (n,)), jnp.zeros(b.shape + (2,))], -1)
+    return z, width
+
+
+def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tuple[int, ...]:
+    """Tooth pairs that can touch during the cycle (static; needs concrete geometry).
+
+    Pair $k$ is in the window if its nominal contact lies on both active flanks for some
+    position of the cycle and some slice, widened by `margin` pairs on each side for the
+    edge contacts of approaching and receding teeth.
+    """
+    zones = pair.contact_zones()
+    if len(zones) > 1:
+        window = sorted(set().union(*(pair_window(zone, pitches, margin) for zone in zones)))
+        return tuple(range(window[0], window[-1] + 1))
+    pair = zones[0].resolve()
+    grid = np.linspace(-math.pi, math.pi, 8001)
+    u1, u2 = jax.vmap(pair.contact_guess)(as_float(grid))
+    lo1, hi1 = pair.profile_limits(0)
+    lo2, hi2 = pair.profile_limits(1)
+    ok = (
+        (np.asarray(u1) >= np.asarray(lo1)) & (np.asarray(u1) <= np.asarray(hi1))
+        & (np.asarray(u2) >= np.asarray(lo2)) & (np.asarray(u2) <= np.asarray(hi2))
+    )
+    ok = ok.reshape(ok.shape[0], -1).any(axis=1)
+    if not ok.any():
+        raise ValueError("the pair has no active contact: check its geometry")
+    angle_lo, angle_hi = grid[ok].min(), grid[ok].max()
+    b = np.max(np.asarray(pair.face_width))
+    leads = np.asarray(jax.vmap(lambda z: pair.lead_rotation(0, z))(as_float(np.linspace(-b / 2, b / 2, 41))))
+    p = 2 * math.pi / pair.teeth[0]
+    phi_lo, phi_hi = -0.5 * pitches * p, 0.5 * pitches * p
+    k_lo = math.ceil((phi_lo + leads.min() - angle_hi) / p) - margin
+    k_hi = math.floor((phi_hi + leads.max() - angle_lo) / p) + margin
+    return tuple(range(k_lo, k_hi + 1))
