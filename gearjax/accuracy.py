@@ -1,9 +1,8 @@
 """Discretisation and solver settings, in one static object with named presets.
 
 `Accuracy` is hashable configuration (every field static): changing it recompiles, which
-is what makes the compiled program contain exactly the resolution asked for.
-`benchmarks/accuracy.py` reports, per knob and preset, the error against `reference` and
-the time it costs.
+is what makes the compiled program contain exactly the resolution asked for. The presets'
+errors against `reference` and their cost in time have not been measured yet.
 """
 
 from __future__ import annotations

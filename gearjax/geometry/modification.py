@@ -9,9 +9,9 @@ $w$ the axial position from mid-face (mm):
 $$\delta = y_2\Big(\frac{s - (s_a - y_4)}{y_4}\Big)_+^2 + y_1\Big(\frac{s_\text{start} + y_3 - s}{y_3}\Big)_+^2
         + y_5\Big(\frac{|w| - y_6/2}{(b - y_6)/2}\Big)_+^2 .$$
 
-Each term is $C^1$ at its start point and they add. These are the standard forms; the
-seed's printed formulas are garbled (as printed its profile relief vanishes at the tip and
-its crowning peaks at mid-face), see DESIGN.md.
+Each term is $C^1$ at its start point and they add. These are the standard forms; seed
+001's printed formulas are garbled (as printed its profile relief vanishes at the tip and
+its crowning peaks at mid-face, the opposite of what its text and figures describe).
 """
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ $c_{\gamma\alpha} = c'(0.75\varepsilon_\alpha + 0.25)$ and $c_{\gamma\beta} = 0.
 N/(mm·µm). Valid for $F_tK_A/b \ge 100$ N/mm and solid steel discs ($C_R = 1$).
 
 ISO/TR 6336-30:2022, example 1 evaluates $q'$ with the printed (rounded) profile shift
-$x_1 = 0.145$ and gets $c' = 12.370$, $c_{\gamma\alpha} = 17.465$; `tests/test_ltca_iso.py`
-reproduces both.
+$x_1 = 0.145$ and gets $c' = 12.370$, $c_{\gamma\alpha} = 17.465$;
+`tests/test_ltca_compliance.py` reproduces both.
 """
 
 from __future__ import annotations
