@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from ._custom_types import ArrayLike
+from ._solution import ADJOINT
 
 
 def as_float(x: ArrayLike) -> jax.Array:
@@ -75,7 +76,7 @@ def inverse_involute(value: ArrayLike) -> jax.Array:
     start = q - (2.0 / 15.0) * q**3
     solver = optx.Newton(rtol=1e-14, atol=1e-14)
     sol = optx.root_find(
-        _inverse_involute_residual, solver, start, args=value, max_steps=32, throw=False
+        _inverse_involute_residual, solver, start, args=value, max_steps=32, throw=False, adjoint=ADJOINT
     )
     return sol.value
 
