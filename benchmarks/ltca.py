@@ -43,7 +43,7 @@ def main(argv=None):
 
     for n in args.slices:
         acc = gj.Accuracy(positions_per_pitch=args.positions, face_slices=n)
-        scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=acc)
+        scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0), accuracy=acc)
         torques = jax.numpy.asarray([1.0e6])
         compile_s, run_s, runs = time_compiled(_load_sweep, scene, torques, repeats=args.repeats)
         points = len(scene.pairs) * n
@@ -54,7 +54,7 @@ def main(argv=None):
         write("ltca", out)
 
     acc = gj.Accuracy(positions_per_pitch=args.positions, face_slices=21)
-    scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=acc)
+    scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0), accuracy=acc)
     for m in args.loads:
         torques = jax.numpy.asarray(np.linspace(1.0e5, 2.0e6, m))
         compile_s, run_s, runs = time_compiled(_load_sweep, scene, torques, repeats=args.repeats if m < 1000 else 1)

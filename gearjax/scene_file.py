@@ -7,7 +7,7 @@ section, is documented in the README. Errors name the offending field as `sectio
 
 from __future__ import annotations
 
-import tomllib
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +20,11 @@ from .geometry.modification import FlankModification
 from .ltca import IsoCompliance, SliceCompliance
 from .scene import EFFECTS, OperatingPoint, Scene
 from .units import Material
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, packaged as tomli
+    import tomli as tomllib
 
 
 class SceneFileError(ValueError):
@@ -187,7 +192,7 @@ def scene_from_dict(data: dict) -> Scene:
         _unknown("operating", table, _OPERATING_KEYS)
         torque = _number("operating", "torque_Nm", table["torque_Nm"]) if "torque_Nm" in table else None
         speed = _number("operating", "speed_rpm", table.get("speed_rpm", 0.0))
-        operating = _build("operating", OperatingPoint.from_nm_rpm, torque_Nm=torque, speed_rpm=speed)
+        operating = _build("operating", OperatingPoint, torque_Nm=torque, speed_rpm=speed)
 
     material = None
     if "material" in data:

@@ -48,7 +48,7 @@ def test_tca_kind_is_an_enumeration_matching_the_edge_contacts(spur_pair):
 
 
 def _loaded(pair, **accuracy):
-    return gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=TINY.replace(**accuracy))
+    return gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0), accuracy=TINY.replace(**accuracy))
 
 
 def test_unconverged_ltca_raises_with_throw_and_returns_its_code_without(seed_pair):
@@ -79,7 +79,7 @@ def test_unconverged_tca_candidates_warn_with_throw(seed_pair):
 def test_unconverged_first_contact_search_raises(seed_pair):
     y = jnp.array([5.9, 6.8, 3800.0, 4300.0, 6.2, 4600.0]) / 1000.0
     scene = gj.Scene(
-        seed_pair, gj.FlankModification.from_vector(y), operating=gj.OperatingPoint.from_nm_rpm(1000.0, 5000.0),
+        seed_pair, gj.FlankModification.from_vector(y), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
         effects=("impact",), accuracy=gj.Accuracy(positions_per_pitch=16, face_slices=9, impact_max_steps=1),
         pairs=(-2, -1, 0, 1, 2),
     )
@@ -122,7 +122,7 @@ def test_compiled_simulate_program_has_no_host_callback(seed_pair, effects, comp
     """Solver outcomes are result codes, so the program stays cacheable by JAX's
     persistent compilation cache (which never stores a program with a host callback)."""
     scene = gj.Scene(
-        seed_pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0 if effects else None, 5000.0),
+        seed_pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0 if effects else None, speed_rpm=5000.0),
         compliance=compliance, effects=effects, accuracy=TINY, pairs=(-2, -1, 0, 1, 2),
     )
     assert CALLBACK not in program_text(scene)

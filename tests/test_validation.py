@@ -123,8 +123,8 @@ def test_unmodified_length_beyond_face_width_is_rejected(seed_pair):
     "factory, name",
     [
         (lambda: OperatingPoint(torque=-5.0), "torque"),
-        (lambda: OperatingPoint.from_nm_rpm(torque_Nm=-1.0), "torque_Nm"),
-        (lambda: OperatingPoint.from_nm_rpm(torque_Nm=100.0, speed_rpm=float("nan")), "speed_rpm"),
+        (lambda: OperatingPoint(torque_Nm=-1.0), "torque_Nm"),
+        (lambda: OperatingPoint(torque_Nm=100.0, speed_rpm=float("nan")), "speed_rpm"),
         (lambda: Material(youngs_modulus=0.0), "youngs_modulus"),
         (lambda: Material(poisson_ratio=0.6), "poisson_ratio"),
         (lambda: MeshErrors(misalignment=float("inf")), "misalignment"),

@@ -123,9 +123,9 @@ NB04 = [
     "\nfrom gearjax.papers.seed001 import paper_optimum",
     """pair = gj.InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)
 acc = gj.Accuracy(positions_per_pitch=24, face_slices=15)
-scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint.from_nm_rpm(1000.0, 5000.0), accuracy=acc)
+scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0), accuracy=acc)
 torques_Nm = np.array([0.0, 100.0, 250.0, 400.0, 700.0, 1000.0, 1300.0, 1600.0, 2000.0])
-sweep = load_sweep(scene, torques_Nm * 1e3)
+sweep = load_sweep(scene, torques_Nm=torques_Nm)
 lte = np.asarray(sweep.ltca.transmission_error_line) * 1e3
 print("converged everywhere:", bool(np.all(np.asarray(sweep.ltca.converged))))""",
     "md:## Loaded TE against load\n\nThe mean loaded TE grows almost linearly with load; its "
@@ -148,8 +148,8 @@ print(f"max load share {float(design.max_load_share):.3f}, max pressure {float(d
       f"{float(iso_mesh_stiffness(pair).mesh_stiffness):.2f}")""",
     "md:## Compliance models\n\nThe iso model (uniform line stiffness) against the slice model, "
     "for the unmodified pair at 1000 N·m.",
-    """plain = gj.Scene(pair, operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=acc)
-iso_scene = gj.Scene(pair, operating=gj.OperatingPoint.from_nm_rpm(1000.0), accuracy=acc, compliance=IsoCompliance())
+    """plain = gj.Scene(pair, operating=gj.OperatingPoint(torque_Nm=1000.0), accuracy=acc)
+iso_scene = gj.Scene(pair, operating=gj.OperatingPoint(torque_Nm=1000.0), accuracy=acc, compliance=IsoCompliance())
 ax = None
 for name, sc in (("slice", plain), ("iso", iso_scene)):
     r = gj.simulate(sc).ltca
@@ -173,7 +173,7 @@ plain = paper.at[jnp.array([0, 1, 4])].set(0.0)                        # no reli
 
 def impact(y, torque_Nm, rpm=5000.0):
     scene = gj.Scene(pair, gj.FlankModification.from_vector(y), effects=("impact",), accuracy=acc,
-                     operating=gj.OperatingPoint.from_nm_rpm(torque_Nm, rpm), pairs=(-2, -1, 0, 1, 2))
+                     operating=gj.OperatingPoint(torque_Nm=torque_Nm, speed_rpm=rpm), pairs=(-2, -1, 0, 1, 2))
     return gj.simulate(scene).impact
 
 loads = np.array([100.0, 250.0, 400.0, 600.0, 800.0, 1000.0, 1300.0, 1600.0])

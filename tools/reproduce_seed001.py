@@ -36,7 +36,7 @@ def main(fast: bool = False) -> dict:
 
     def scene(y, torque_Nm, rpm=5000.0):
         return gj.Scene(pair, gj.FlankModification.from_vector(y), effects=("impact",), accuracy=acc,
-                        operating=gj.OperatingPoint.from_nm_rpm(torque_Nm, rpm), pairs=(-2, -1, 0, 1, 2))
+                        operating=gj.OperatingPoint(torque_Nm=torque_Nm, speed_rpm=rpm), pairs=(-2, -1, 0, 1, 2))
 
     def run(y, torque_Nm, rpm=5000.0):
         imp = gj.simulate(scene(y, torque_Nm, rpm)).impact
