@@ -125,13 +125,68 @@ def scene_from_dict(data: dict) -> Scene:
     _unknown("scene", data, _SECTIONS)
     if "pair" not in data:
         raise _fail("pair", "missing section [pair]")
+    pair = _pair_from(data["pair"])
+    modification = _modification_from(data, "modification")
+    gear_modification = _modification_from(data, "gear_modification")
+    errors = _errors_from(data)
+    operating = _operating_from(data)
+    material = _material_from(data)
+    compliance, hub_radius, extended = _ltca_from(data.get("ltca", {}))
+    inertia = _inertia_from(data.get("impact", {}))
+    accuracy, effects, pitches = _analysis_from(data.get("analysis", {}))
+    return _build(
+        "analysis",
+        Scene,
+        pair=pair,
+        modification=modification,
+        gear_modification=gear_modification,
+        errors=errors,
+        operating=operating,
+        material=material,
+        compliance=compliance,
+        hub_radius=hub_radius,
+        inertia=inertia,
+        effects=effects,
+        accuracy=accuracy,
+        pitches=pitches,
+        extended_contact=extended,
+    )
 
-    p = data["pair"]
+
+def _pair_from(p: dict):
+    """[pair]: the gear pair of the family it names (default "involute")."""
     _unknown("pair", p, _PAIR_KEYS)
     family = p.get("family", "involute")
     families = ("involute", "curvilinear", "double_circular_arc")
     if family not in families:
         raise _fail("pair.family", f"must be one of {', '.join(repr(f) for f in families)}; got {family!r}")
+    _check_family_keys(p, family)
+    teeth = p["teeth"]
+    if not isinstance(teeth, list) or len(teeth) != 2 or not all(isinstance(t, int) and not isinstance(t, bool) for t in teeth):
+        raise _fail("pair.teeth", f"must be a list of two integers; got {teeth!r}")
+    kwargs: dict[str, Any] = {"teeth": tuple(teeth)}
+    for key in ("normal_module", "pressure_angle_deg", "helix_angle_deg", "face_width", "center_distance"):
+        if key in p:
+            kwargs[key] = _number("pair", key, p[key])
+    for key in ("profile_shift", "addendum_coefficient", "dedendum_coefficient", "root_radius_coefficient"):
+        if key in p:
+            kwargs[key] = _numbers("pair", key, p[key], 2) if isinstance(p[key], list) else _number("pair", key, p[key])
+    if "hand" in p:
+        kwargs["hand"] = p["hand"]
+    if family == "double_circular_arc":
+        if "axial_pitch_error_um" in p:
+            kwargs["axial_pitch_error"] = _number("pair", "axial_pitch_error_um", p["axial_pitch_error_um"]) * 1e-3
+        return _build("pair", DoubleArcGearPair, **kwargs)
+    if family == "curvilinear":
+        if "tooth_trace_radius" in p:
+            kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])
+        return _build("pair", CurvilinearGearPair, **kwargs)
+    return _build("pair", InvoluteGearPair, **kwargs)
+
+
+def _check_family_keys(p: dict, family: str) -> None:
+    """Keys that belong to another family, or that a family fixes, are errors; `teeth` and
+    `normal_module` are required."""
     only = {
         "involute": ("hand",), "curvilinear": ("tooth_trace_radius",), "double_circular_arc": ("axial_pitch_error_um",),
     }
@@ -149,58 +204,49 @@ def scene_from_dict(data: dict) -> Scene:
     for required in ("teeth", "normal_module"):
         if required not in p:
             raise _fail(f"pair.{required}", "missing required field")
-    teeth = p["teeth"]
-    if not isinstance(teeth, list) or len(teeth) != 2 or not all(isinstance(t, int) and not isinstance(t, bool) for t in teeth):
-        raise _fail("pair.teeth", f"must be a list of two integers; got {teeth!r}")
-    kwargs: dict[str, Any] = {"teeth": tuple(teeth)}
-    for key in ("normal_module", "pressure_angle_deg", "helix_angle_deg", "face_width", "center_distance"):
-        if key in p:
-            kwargs[key] = _number("pair", key, p[key])
-    for key in ("profile_shift", "addendum_coefficient", "dedendum_coefficient", "root_radius_coefficient"):
-        if key in p:
-            kwargs[key] = _numbers("pair", key, p[key], 2) if isinstance(p[key], list) else _number("pair", key, p[key])
-    if "hand" in p:
-        kwargs["hand"] = p["hand"]
-    if family == "double_circular_arc":
-        if "axial_pitch_error_um" in p:
-            kwargs["axial_pitch_error"] = _number("pair", "axial_pitch_error_um", p["axial_pitch_error_um"]) * 1e-3
-        pair = _build("pair", DoubleArcGearPair, **kwargs)
-    elif family == "curvilinear":
-        if "tooth_trace_radius" in p:
-            kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])
-        pair = _build("pair", CurvilinearGearPair, **kwargs)
-    else:
-        pair = _build("pair", InvoluteGearPair, **kwargs)
 
-    mods = {}
-    for section in ("modification", "gear_modification"):
-        if section in data:
-            table = data[section]
-            _unknown(section, table, _MOD_KEYS)
-            args = {name: _number(section, key, table[key]) * scale for key, (name, scale) in _MOD_KEYS.items() if key in table}
-            mods[section] = _build(section, FlankModification, **args)
 
-    errors = None
-    if "errors" in data:
-        table = data["errors"]
-        _unknown("errors", table, _ERROR_KEYS)
-        errors = _build("errors", MeshErrors, **{name: _number("errors", key, table[key]) * 1e-3 for key, name in _ERROR_KEYS.items() if key in table})
+def _modification_from(data: dict, section: str):
+    """[modification] / [gear_modification]: a `FlankModification` (µm amounts), or None."""
+    if section not in data:
+        return None
+    table = data[section]
+    _unknown(section, table, _MOD_KEYS)
+    args = {name: _number(section, key, table[key]) * scale for key, (name, scale) in _MOD_KEYS.items() if key in table}
+    return _build(section, FlankModification, **args)
 
-    operating = None
-    if "operating" in data:
-        table = data["operating"]
-        _unknown("operating", table, _OPERATING_KEYS)
-        torque = _number("operating", "torque_Nm", table["torque_Nm"]) if "torque_Nm" in table else None
-        speed = _number("operating", "speed_rpm", table.get("speed_rpm", 0.0))
-        operating = _build("operating", OperatingPoint, torque_Nm=torque, speed_rpm=speed)
 
-    material = None
-    if "material" in data:
-        table = data["material"]
-        _unknown("material", table, _MATERIAL_KEYS)
-        material = _build("material", Material, **{k: _number("material", k, v) for k, v in table.items()})
+def _errors_from(data: dict):
+    """[errors]: `MeshErrors` (µm), or None."""
+    if "errors" not in data:
+        return None
+    table = data["errors"]
+    _unknown("errors", table, _ERROR_KEYS)
+    return _build("errors", MeshErrors, **{name: _number("errors", key, table[key]) * 1e-3 for key, name in _ERROR_KEYS.items() if key in table})
 
-    ltca = data.get("ltca", {})
+
+def _operating_from(data: dict):
+    """[operating]: `OperatingPoint` from N·m and rpm, or None (unloaded)."""
+    if "operating" not in data:
+        return None
+    table = data["operating"]
+    _unknown("operating", table, _OPERATING_KEYS)
+    torque = _number("operating", "torque_Nm", table["torque_Nm"]) if "torque_Nm" in table else None
+    speed = _number("operating", "speed_rpm", table.get("speed_rpm", 0.0))
+    return _build("operating", OperatingPoint, torque_Nm=torque, speed_rpm=speed)
+
+
+def _material_from(data: dict):
+    """[material]: `Material`, or None (steel)."""
+    if "material" not in data:
+        return None
+    table = data["material"]
+    _unknown("material", table, _MATERIAL_KEYS)
+    return _build("material", Material, **{k: _number("material", k, v) for k, v in table.items()})
+
+
+def _ltca_from(ltca: dict):
+    """[ltca]: (compliance model, hub radius or None, extended_contact)."""
     _unknown("ltca", ltca, _LTCA_KEYS)
     compliance_kind = ltca.get("compliance", "slice")
     if compliance_kind not in ("slice", "iso"):
@@ -225,14 +271,20 @@ def scene_from_dict(data: dict) -> Scene:
     if not isinstance(extended, bool):
         raise _fail("ltca.extended_contact", f"must be true or false; got {extended!r}")
 
-    impact = data.get("impact", {})
-    _unknown("impact", impact, {"inertia_kg_m2"})
-    inertia = None
-    if "inertia_kg_m2" in impact:
-        # 1 kg m^2 = 1e-3 t * 1e6 mm^2 = 1e3 t mm^2
-        inertia = [1e3 * v for v in _numbers("impact", "inertia_kg_m2", impact["inertia_kg_m2"], 2)]
+    return compliance, hub_radius, extended
 
-    analysis = data.get("analysis", {})
+
+def _inertia_from(impact: dict):
+    """[impact]: $(J_1, J_2)$ in t·mm² from kg·m², or None (solid discs)."""
+    _unknown("impact", impact, {"inertia_kg_m2"})
+    if "inertia_kg_m2" not in impact:
+        return None
+    # 1 kg m^2 = 1e-3 t * 1e6 mm^2 = 1e3 t mm^2
+    return [1e3 * v for v in _numbers("impact", "inertia_kg_m2", impact["inertia_kg_m2"], 2)]
+
+
+def _analysis_from(analysis: dict):
+    """[analysis]: (accuracy, effects, pitches)."""
     _unknown("analysis", analysis, _ANALYSIS_KEYS)
     preset = analysis.get("accuracy", "default")
     try:
@@ -249,23 +301,7 @@ def scene_from_dict(data: dict) -> Scene:
     if isinstance(pitches, bool) or not isinstance(pitches, int) or pitches < 1:
         raise _fail("analysis.pitches", f"must be an integer >= 1; got {pitches!r}")
 
-    return _build(
-        "analysis",
-        Scene,
-        pair=pair,
-        modification=mods.get("modification"),
-        gear_modification=mods.get("gear_modification"),
-        errors=errors,
-        operating=operating,
-        material=material,
-        compliance=compliance,
-        hub_radius=hub_radius,
-        inertia=inertia,
-        effects=tuple(effects),
-        accuracy=accuracy,
-        pitches=pitches,
-        extended_contact=extended,
-    )
+    return accuracy, tuple(effects), pitches
 
 
 def load_scene(path: str | Path) -> tuple[Scene, dict]:
