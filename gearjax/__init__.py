@@ -16,7 +16,6 @@ from . import units as units
 from ._solution import (
     RESULTS as RESULTS,
     SimulationError as SimulationError,
-    SimulationWarning as SimulationWarning,
     enum_message as enum_message,
     enum_name as enum_name,
 )

@@ -6,8 +6,8 @@ program from the solvers' own outcomes (no host callback, so a compiled program 
 cacheable by JAX's persistent compilation cache). Items are pytrees: they pass through
 `jit` and `vmap` (a batched result holds one code per batch entry) and compare with `==`
 against an item of the same enumeration, e.g. `result.impact.result == RESULTS.successful`.
-`simulate(scene, throw=True)` turns a failure into a `SimulationError` (and an unconverged
-TCA candidate into a `SimulationWarning`) once the values are concrete; nested stages never
+`simulate(scene, throw=True)` turns a failed LTCA or impact stage into a `SimulationError`
+once the values are concrete (unconverged TCA candidates stay a code); nested stages never
 throw (as in optimistix's `_solution.py`).
 """
 
@@ -77,10 +77,6 @@ class SimulationError(RuntimeError):
         super().__init__(message)
         self.stage = stage
         self.result = result
-
-
-class SimulationWarning(UserWarning):
-    """A stage of `simulate` finished with a warning-level condition (`throw=True`)."""
 
 
 def _leaf(item) -> Any:

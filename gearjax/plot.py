@@ -26,7 +26,7 @@ def _axes(ax):
 def transmission_error(result, ax=None, label=None, **kwargs):
     """Unloaded TE of a `TCAResult` (um along the line of action) against the pinion angle
     (deg)."""
-    te = np.asarray(result.transmission_error) * float(np.asarray(result.action_radius)) * 1e3
+    te = np.asarray(result.transmission_error_line) * 1e3
     return _te_curve(ax, result.pinion_angle, te, "TE along line of action (um)", label, **kwargs)
 
 

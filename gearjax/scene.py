@@ -276,8 +276,9 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
         scene: the `Scene`.
         throw: check the results once they are concrete: a failed LTCA or impact stage
             raises `SimulationError` (a `RuntimeError` naming the stage, what failed and
-            how to fix it), unconverged TCA candidate solves give a `SimulationWarning`.
-            With False (or when called inside `jit`/`vmap`/`grad`, where the results are
+            how to fix it). Unconverged TCA candidate solves are not an error: they are
+            common for edge candidates of pairs entering or leaving the window and are
+            reported in `result.tca.unconverged` and `result.tca.result`. With False (or when called inside `jit`/`vmap`/`grad`, where the results are
             traced) nothing is checked: inspect `result.<stage>.result`.
 
     Returns:
@@ -295,15 +296,13 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
 
 
 def _check_results(result: SimulationResult) -> None:
-    """Raise `SimulationError` for the first failed loaded stage and warn for an
-    unconverged TCA; skipped when the results are traced (inside a transformation)."""
-    import warnings
-
-    from ._solution import RESULTS, SimulationError, SimulationWarning, enum_message, enum_name
+    """Raise `SimulationError` for the first failed loaded stage; skipped when the results
+    are traced (inside a transformation)."""
+    from ._solution import RESULTS, SimulationError, enum_message, enum_name
 
     if not is_concrete(result):
         return
-    for stage in ("tca", "ltca", "impact"):
+    for stage in ("ltca", "impact"):
         stage_result = getattr(result, stage)
         if stage_result is None:
             continue
@@ -314,15 +313,11 @@ def _check_results(result: SimulationResult) -> None:
         names = sorted(set(np.atleast_1d(enum_name(codes))[np.atleast_1d(failed)].tolist()))
         details = " ".join(f"[{name}] {enum_message(getattr(RESULTS, name))}" for name in names)
         where = f" in {int(failed.sum())} of {failed.size} batch entries" if failed.ndim else ""
-        if stage == "tca":
-            text = f"simulate: the TCA stage finished with a warning{where}. {details} (throw=False skips this check.)"
-            warnings.warn(text, SimulationWarning, stacklevel=3)
-        else:
-            text = (
-                f"simulate: the {stage.upper()} stage failed{where}. {details} "
-                f"Pass throw=False to get the results with their codes (result.{stage}.result)."
-            )
-            raise SimulationError(stage, codes, text)
+        text = (
+            f"simulate: the {stage.upper()} stage failed{where}. {details} "
+            f"Pass throw=False to get the results with their codes (result.{stage}.result)."
+        )
+        raise SimulationError(stage, codes, text)
 
 
 @eqx.filter_jit

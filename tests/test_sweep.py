@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import gearjax.sweep
-from gearjax import Accuracy, OperatingPoint, Scene, paper_optimum, simulate
+from gearjax import Accuracy, OperatingPoint, Scene, simulate
+from gearjax.papers.seed001 import paper_optimum
 from gearjax.sweep import load_sweep, regime_transition
 
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)
