@@ -20,6 +20,7 @@ from ._solution import (
     enum_name as enum_name,
 )
 from .accuracy import Accuracy as Accuracy
+from .cache import enable_compilation_cache as enable_compilation_cache
 from .geometry import (
     AbstractFlankPair as AbstractFlankPair,
     AbstractGearPair as AbstractGearPair,

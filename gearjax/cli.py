@@ -1,13 +1,17 @@
 """The `gearjax` command.
 
-    gearjax run [SCENE.toml] [--json]
-    gearjax reproduce curvilinear|dca [--json] [--cross-check]
+    gearjax run [SCENE.toml] [--json] [--no-cache]
+    gearjax reproduce curvilinear|dca [--json] [--cross-check] [--no-cache]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
 scene file prints one line naming the field and exits with status 2. `reproduce` runs the
 reproductions of `gearjax.papers` (the command is presentation: it may import the papers
 package, the core may not).
+
+Compiled programs are stored in JAX's persistent compilation cache (`gearjax.cache`:
+`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`), so a second run of the same scene
+structure loads its program instead of compiling it; `--no-cache` disables that.
 """
 
 from __future__ import annotations
@@ -23,6 +27,16 @@ def _enable_x64() -> None:
     import jax
 
     jax.config.update("jax_enable_x64", True)
+
+
+def _enable_cache(args: argparse.Namespace) -> None:
+    # A fresh process (the command's normal case) gets the persistent cache; when the
+    # command is called in a process that has already compiled programs (tests, notebooks)
+    # the process's own setting stays.
+    from .cache import _cache_started, enable_compilation_cache
+
+    if not args.no_cache and not _cache_started():
+        enable_compilation_cache()
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -75,8 +89,14 @@ def main(argv: list[str] | None = None) -> int:
         "--cross-check", action="store_true",
         help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
     )
+    for command in (run, rep):
+        command.add_argument(
+            "--no-cache", action="store_true",
+            help="do not use the persistent compilation cache ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
+        )
     args = parser.parse_args(argv)
     _enable_x64()
+    _enable_cache(args)
     if args.command == "run":
         return _run(args)
     return _reproduce(args)

@@ -92,7 +92,7 @@ def test_gradient_through_resolve_matches_finite_difference():
 def test_scene_checks_declared_stages():
     pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
     assert pair.supported_effects == frozenset()
-    with pytest.raises(ValueError, match="not available for DoubleArcGearPair.*four-state"):
+    with pytest.raises(ValueError, match="not available for DoubleArcGearPair.*four_state.*four-state"):
         gj.Scene(pair, effects=("ltca",), operating=gj.OperatingPoint(torque=1.0e5))
 
 

@@ -79,7 +79,7 @@ class DoubleArcGearPair(AbstractGearPair):
     supported_effects: ClassVar[frozenset[str]] = frozenset()
     effects_note: ClassVar[str] = (
         "loaded contact of point-contact gears is not implemented; use the rigid TCA (no "
-        "torque) and gearjax.papers.double_arc for the seed's four-state impact model"
+        "torque) and gearjax.papers.four_state for the seed's four-state impact model"
     )
 
     def __init__(
