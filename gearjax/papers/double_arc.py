@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from ..accuracy import Accuracy
@@ -207,6 +208,8 @@ def handover_impacts(pair: DoubleArcGearPair, tca) -> HandoverImpact:
     zone = np.asarray(tca.pair_zone)[pair_idx]
     key = zone * 1000 + np.asarray(tca.pair_index)[pair_idx]
     te = np.asarray(tca.transmission_error)
+    (kinds,) = jax.tree_util.tree_leaves(tca.kind)  # ContactKind item -> its index array
+    kinds = np.asarray(kinds)
     pitch = np.array([float(pair.pitch_radius[0]), 0.0])
     rows = []
     n = len(te)
@@ -220,7 +223,7 @@ def handover_impacts(pair: DoubleArcGearPair, tca) -> HandoverImpact:
         normal = normal / np.linalg.norm(normal)
         d = pitch - point
         radius = abs(normal[0] * d[1] - normal[1] * d[0])
-        rows.append((float(tca.pinion_angle[j]), int(zone[j]), int(tca.kind[j, p, s]), te[j] - te[prev], radius))
+        rows.append((float(tca.pinion_angle[j]), int(zone[j]), int(kinds[j, p, s]), te[j] - te[prev], radius))
     cols = list(zip(*rows)) if rows else [()] * 5
     return HandoverImpact(*(jnp.asarray(c) for c in cols))
 
