@@ -63,7 +63,9 @@ def test_float32_option_agrees_with_float64(seed_pair):
                             tip_relief_length=8.0, crowning=0.015, unmodified_length=2.0)
     acc = Accuracy(positions_per_pitch=8, face_slices=7)
     r64 = simulate(Scene(seed_pair, mod, accuracy=acc)).tca
-    r32 = simulate(Scene(seed_pair, mod, accuracy=acc.replace(dtype="float32", newton_rtol=1e-5, newton_atol=1e-5))).tca
+    # throw=False: at float32 and these tolerances a few non-binding tip-edge candidates
+    # (0.03-0.3 mm away) do not converge; the warning-level code is not under test here.
+    r32 = simulate(Scene(seed_pair, mod, accuracy=acc.replace(dtype="float32", newton_rtol=1e-5, newton_atol=1e-5)), throw=False).tca
     assert r32.transmission_error.dtype == np.float32
     te64 = np.asarray(r64.transmission_error) * float(seed_pair.base_radius[1]) * 1e3
     te32 = np.asarray(r32.transmission_error, dtype=float) * float(seed_pair.base_radius[1]) * 1e3
@@ -73,7 +75,9 @@ def test_float32_option_agrees_with_float64(seed_pair):
 
 def test_scene_window_covers_all_pairs_in_contact(spur_pair):
     scene = Scene(spur_pair, accuracy=Accuracy(positions_per_pitch=8, face_slices=3))
-    tca = simulate(scene).tca
+    # throw=False: the approaching gear-tip-edge candidates whose only solution lies below
+    # the pinion's active profile do not converge (a warning-level result code).
+    tca = simulate(scene, throw=False).tca
     in_contact = np.asarray(tca.in_contact(1e-9)).any(-1)
     # the outermost pairs of the window are margin for edge contacts: never in flank contact
     assert not in_contact[:, 0].any() and not in_contact[:, -1].any()
@@ -88,7 +92,9 @@ def test_stacked_designs_run_batched_and_match_single_runs():
     batch = stack_scenes(scenes)
     out = jax.vmap(lambda s: simulate(s).tca.transmission_error)(batch)
     assert out.shape == (3, TINY.positions_per_pitch)
-    single = [np.asarray(simulate(dataclasses.replace(s, pairs=batch.pairs)).tca.transmission_error) for s in scenes]
+    # throw=False: the 12 deg pair's approaching gear-tip-edge candidate whose only solution
+    # lies below the pinion's active profile does not converge (a warning-level code).
+    single = [np.asarray(simulate(dataclasses.replace(s, pairs=batch.pairs), throw=False).tca.transmission_error) for s in scenes]
     np.testing.assert_allclose(np.asarray(out), np.stack(single), rtol=1e-9, atol=1e-14)
 
 
