@@ -55,7 +55,8 @@ def _run(args: argparse.Namespace) -> int:
     except SceneFileError as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
-    result = simulate(scene)
+    # The summary reports every stage's result code, so a failed stage is shown, not raised.
+    result = simulate(scene, throw=False)
     out = result_dict(scene, result, notes)
     if args.json:
         print(json.dumps(out, indent=2))

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from .tca import ContactKind
+
 
 def _axes(ax):
     if ax is not None:
@@ -54,7 +56,7 @@ def contact_path(result, ax=None, tolerance=1e-4, cmap="viridis"):
     z = np.broadcast_to(np.asarray(result.slice_z), touching.shape)
     s = np.asarray(result.pinion_parameter)
     angle = np.broadcast_to(np.degrees(np.asarray(result.pinion_angle))[:, None, None], touching.shape)
-    edge = np.asarray(result.kind) != 0
+    edge = ~np.asarray(result.kind == ContactKind.flank)
     flank = touching & ~edge
     sc = ax.scatter(z[flank], s[flank], c=angle[flank], s=10, cmap=cmap)
     if np.any(touching & edge):
