@@ -1,9 +1,19 @@
-"""Test configuration: float64 and strict dtype promotion, as the engine's reference."""
+"""Test configuration: float64 and strict dtype promotion, as the engine's reference.
 
-import jax
-import pytest
+The command-line tests run `gearjax.cli.main` in-process, and the command enables JAX's
+persistent compilation cache; it goes to a directory under the system's temporary
+directory rather than the user's cache.
+"""
 
-import gearjax  # noqa: F401  (imported first: sets its XLA CPU flag before backends start)
+import os
+import tempfile
+
+os.environ.setdefault("GEARJAX_CACHE_DIR", os.path.join(tempfile.gettempdir(), "gearjax-test-cache"))
+
+import jax  # noqa: E402
+import pytest  # noqa: E402
+
+import gearjax  # noqa: F401, E402  (imported first: sets its XLA CPU flag before backends start)
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
