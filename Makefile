@@ -1,4 +1,5 @@
-# Set-up on a fresh machine needs only Python >= 3.10 (python3 on PATH).
+# Set-up on a fresh machine needs only Python (python3 on PATH): >= 3.10 for the library and
+# `make demo`, >= 3.11 for `make test` (its pinned tools need it).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
