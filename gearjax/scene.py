@@ -322,19 +322,22 @@ def _check_results(result: SimulationResult) -> None:
 
 @eqx.filter_jit
 def _simulate(scene: Scene) -> SimulationResult:
+    # The pair's derived geometry is resolved once for every stage (each stage's own
+    # `resolve()` then returns it as it is).
+    pair = scene.pair.resolve()
     with jax.named_scope("stage_tca"):
         tca = tooth_contact_analysis(
-            scene.pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches
+            pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches
         )
     ltca = None
     if "ltca" in scene.effects:
         with jax.named_scope("stage_ltca"):
-            ltca = loaded_contact_analysis(scene.pair, tca, scene.operating.torque, scene.contact_model)
+            ltca = loaded_contact_analysis(pair, tca, scene.operating.torque, scene.contact_model)
     impact = None
     if "impact" in scene.effects:
         with jax.named_scope("stage_impact"):
             impact = impact_analysis(
-                scene.pair,
+                pair,
                 scene.depth,
                 tca,
                 ltca,

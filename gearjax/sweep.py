@@ -79,10 +79,11 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
 
 @eqx.filter_jit
 def _load_sweep(scene: Scene, torques) -> LoadSweep:
-    tca = tooth_contact_analysis(scene.pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+    pair = scene.pair.resolve()  # once, for the TCA and every load's LTCA
+    tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
 
     def one(torque):
-        return loaded_contact_analysis(scene.pair, tca, torque, scene.contact_model)
+        return loaded_contact_analysis(pair, tca, torque, scene.contact_model)
 
     return LoadSweep(tca=tca, ltca=jax.vmap(one)(torques))
 
