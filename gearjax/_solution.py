@@ -42,7 +42,8 @@ class RESULTS(eqx.Enumeration):
     )
     ltca_unconverged = (
         "The loaded contact solve did not converge at some position (LTCAResult.converged). "
-        "Raise Accuracy.contact_max_steps, or use a larger contact_smoothing."
+        "The active set did not settle (or, for Palmgren's law, Newton did not reach "
+        "newton_rtol/newton_atol) within Accuracy.contact_max_steps: raise it."
     )
     first_contact_not_bracketed = (
         "No first contact of an incoming tooth pair was bracketed on the cycle grid: the "
@@ -56,7 +57,7 @@ class RESULTS(eqx.Enumeration):
     )
     impact_contact_unconverged = (
         "The loaded contact solve of the pairs in mesh did not converge at the first-contact "
-        "position. Raise Accuracy.contact_max_steps, or use a larger contact_smoothing."
+        "position. Raise Accuracy.contact_max_steps."
     )
     stiffness_fit_failed = (
         "A contact solve of the local force-approach curve at the impact point did not "

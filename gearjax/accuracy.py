@@ -34,10 +34,8 @@ class Accuracy(eqx.Module):
         tca_method: "surface" (general TCA on the real flanks, edge contact included) or
             "plane_of_action" (involute families only: contact on the plane of action with
             the separation equal to the sum of both flanks' depths).
-        contact_smoothing: smoothing $\\varepsilon$ of the load complementarity in LTCA
-            (Fischer–Burmeister, dimensionless): the solution satisfies
-            $n g_i \\cdot y_i/1\\,\\mu m = \\varepsilon^2$, $g_i$ the torque fraction of point $i$.
-        contact_max_steps: Newton cap of each stage of the contact solve.
+        contact_max_steps: cap on the active-set steps of each position's contact solve
+            (`gearjax.ltca.solver`); the seed pair settles in a few steps.
         quadrature_points: Gauss–Legendre points of the tooth compliance integrals.
         impact_max_steps: bisection cap of the first-contact search (each step halves the
             bracket, one grid step wide at the start).
@@ -55,7 +53,6 @@ class Accuracy(eqx.Module):
     newton_atol: float = eqx.field(static=True, default=1e-10)
     newton_max_steps: int = eqx.field(static=True, default=12)
     tca_method: str = eqx.field(static=True, default="surface")
-    contact_smoothing: float = eqx.field(static=True, default=1e-6)
     contact_max_steps: int = eqx.field(static=True, default=40)
     quadrature_points: int = eqx.field(static=True, default=24)
     impact_max_steps: int = eqx.field(static=True, default=64)
@@ -70,7 +67,6 @@ class Accuracy(eqx.Module):
         check_range("newton_atol", self.newton_atol, 0.0, 1e-2, low_inclusive=False)
         check_int("newton_max_steps", self.newton_max_steps, 1, 10000)
         check_choice("tca_method", self.tca_method, TCA_METHODS)
-        check_range("contact_smoothing", self.contact_smoothing, 0.0, 0.1, low_inclusive=False)
         check_int("contact_max_steps", self.contact_max_steps, 1, 10000)
         check_int("quadrature_points", self.quadrature_points, 2, 200)
         check_int("impact_max_steps", self.impact_max_steps, 1, 10000)
@@ -108,7 +104,6 @@ PRESETS = {
         newton_rtol=1e-13,
         newton_atol=1e-13,
         newton_max_steps=48,
-        contact_smoothing=1e-8,
         contact_max_steps=80,
         quadrature_points=48,
     ),

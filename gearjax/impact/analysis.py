@@ -288,9 +288,8 @@ def _local_fit(ctx: _Context, tca: TCAResult, column, p_arm) -> LocalStiffness:
     model = ctx.model
     points = model.compliance(pair, model.material, model.hub_radius, tca, n_mid, acc.quadrature_points,
                               jnp.ones(tca.valid[..., :n_mid].shape, p_arm.dtype))
-    idx = column * n_mid + jnp.arange(n_mid)
-    matrix = points.matrix[0][idx][:, idx]
-    nonlinear = points.nonlinear[0][idx]
+    matrix = points.blocks[0, column]
+    nonlinear = points.nonlinear[0, column]
     _, q_all = _levers(tca, n_mid, pair.center(1))
     # Separations count from the first touching cell midpoint: a face-end M (width 0) has
     # no compliance of its own, and an offset at the start would spoil the power law.

@@ -85,7 +85,8 @@ def local_stiffness(
     separation = jnp.where(valid, separation, NO_CONTACT)
 
     def approach(force):
-        sol = solve_with(ContactProblem(compliance, nonlinear, separation, ones, ones, force, exponent), accuracy)
+        problem = ContactProblem(compliance[None], nonlinear[None], separation[None], ones[None], ones[None], force, exponent)
+        sol = solve_with(problem, accuracy)
         return sol.rotation, sol.converged
 
     delta, converged = jax.vmap(approach)(forces)

@@ -293,21 +293,21 @@ def _loaded_slices(pair, tca: TCAResult, model: ContactModel, active_pairs):
 
 
 def _solve_positions(points, separation, levers, torque, model: ContactModel, rates: bool):
-    """The contact problem of every position (vmapped), and $\\mathrm d\\Theta/\\mathrm dT$
-    by forward differentiation when `rates`."""
-    n_pos = separation.shape[0]
-    p, q = (lever.reshape(n_pos, -1) for lever in levers)
+    """The contact problem of every position (vmapped over positions; blocks by tooth
+    pair), and $\\mathrm d\\Theta/\\mathrm dT$ by forward differentiation when `rates`."""
+    p, q = levers
 
-    def one(matrix, nonlinear, e, pa, qa):
+    def one(blocks, nonlinear, e, pa, qa):
         def solve(t):
-            return solve_with(ContactProblem(matrix, nonlinear, e, pa, qa, t, points.exponent), model.accuracy)
+            problem = ContactProblem(blocks, nonlinear, e, pa, qa, t, points.exponent, points.diagonal)
+            return solve_with(problem, model.accuracy)
 
         if rates:
             sol, dsol = jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
             return sol, dsol.rotation
         return solve(torque), None
 
-    return jax.vmap(one)(points.matrix, points.nonlinear, separation.reshape(n_pos, -1), p, q)
+    return jax.vmap(one)(points.blocks, points.nonlinear, separation, p, q)
 
 
 def hertz_pressure(tca: TCAResult, loads, weights, material: Material, n_mid: int):

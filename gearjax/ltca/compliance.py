@@ -58,18 +58,29 @@ HERTZ_LAWS = ("palmgren", "linear")
 
 
 class PointCompliance(eqx.Module):
-    """Compliance of the contact points of every position.
+    """Compliance of the contact points of every position, block by tooth pair.
 
     Attributes:
-        matrix: linear normal compliance (pos, n, n), mm/N, n = pairs x slices.
-        nonlinear: coefficients $a_i$ (pos, n) of the extra approach $a_i F_i^{e}$, mm/N^e
-            (zero for a linear model).
+        blocks: linear normal compliance of each tooth pair's points (pos, pair, slice,
+            slice), mm/N; points of different pairs do not interact.
+        nonlinear: coefficients $a_i$ (pos, pair, slice) of the extra approach $a_i F_i^{e}$,
+            mm/N^e (zero for a linear model).
         exponent: the exponent $e$ (static; 0.9 for Palmgren's line contact).
+        diagonal: the blocks are diagonal (static; no coupling between slices).
     """
 
-    matrix: Float[Array, "pos n n"]
-    nonlinear: Float[Array, "pos n"]
+    blocks: Float[Array, "pos pair s s"]
+    nonlinear: Float[Array, "pos pair s"]
     exponent: float = eqx.field(static=True, default=1.0)
+    diagonal: bool = eqx.field(static=True, default=False)
+
+    @property
+    def matrix(self) -> Float[Array, "pos n n"]:
+        """The dense block-diagonal compliance (pos, n, n), n = pairs × slices (mm/N)."""
+        n_pos, n_pair, n_s, _ = self.blocks.shape
+        eye = jnp.eye(n_pair, dtype=self.blocks.dtype)
+        dense = jnp.einsum("kl,pkij->pkilj", eye, self.blocks)
+        return dense.reshape(n_pos, n_pair * n_s, n_pair * n_s)
 
 
 def _slice_lengths(tca: TCAResult, n_mid: int):
@@ -121,9 +132,9 @@ class IsoCompliance(AbstractCompliance):
         line_stiffness = 1000.0 * iso.mesh_stiffness / (pair.transverse_contact_ratio * jnp.cos(pair.base_helix_angle))
         lengths = width / frac * weights
         diagonal = 1.0 / (line_stiffness * lengths)  # (pos, pair, slice)
-        flat = diagonal.reshape(diagonal.shape[0], -1)
         del material
-        return PointCompliance(jax.vmap(jnp.diag)(flat), jnp.zeros_like(flat), 1.0)
+        blocks = jax.vmap(jax.vmap(jnp.diag))(diagonal)
+        return PointCompliance(blocks, jnp.zeros_like(diagonal), 1.0, diagonal=True)
 
 
 def pasternak_compliance(compliance_per_width, slice_width, decay_length):
@@ -219,6 +230,4 @@ class SliceCompliance(AbstractCompliance):
         else:
             nonlinear = PALMGREN / lengths**0.8
             exponent = 0.9
-        n_pos, n_pair, n_s = frac.shape
-        matrix = jax.vmap(lambda b: jax.scipy.linalg.block_diag(*b))(blocks) if n_pair > 1 else blocks[:, 0]
-        return PointCompliance(matrix.reshape(n_pos, n_pair * n_s, n_pair * n_s), nonlinear.reshape(n_pos, -1), exponent)
+        return PointCompliance(blocks, nonlinear, exponent, diagonal=self.coupling_length == 0.0)

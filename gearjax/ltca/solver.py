@@ -1,10 +1,10 @@
-r"""The loaded contact problem of one mesh position (Conry & Seireg 1971).
+r"""The loaded contact problem of one mesh position (Conry & Seireg 1971), solved exactly.
 
-Contact points $i$ (all tooth pairs and slices) have initial separations $e_i$ (mm, normal),
-a linear compliance $f_{ij}$ (mm/N), an optional nonlinear contact approach $a_iF_i^{e}$, the
-pinion moment arm $p_i = (x_i \times n_i)_z$ (torque per unit normal load, mm) and the gear
-arm $q_i$ (normal closure per unit extra lag of the gear, mm/rad). Find loads $F_i \ge 0$ and
-the gear's extra lag $\Theta$ with
+Contact points $i$ (tooth pair $k$, face slice $j$) have initial separations $e_i$ (mm,
+normal), a linear compliance $f_{ij}$ (mm/N), an optional nonlinear contact approach
+$a_iF_i^{e}$, the pinion moment arm $p_i = (x_i \times n_i)_z$ (torque per unit normal
+load, mm) and the gear arm $q_i$ (normal closure per unit extra lag of the gear, mm/rad).
+Find loads $F_i \ge 0$ and the gear's extra lag $\Theta$ with
 
 $$y_i = \sum_j f_{ij}F_j + a_iF_i^{e} + e_i - q_i\Theta \ge 0,\qquad F_iy_i = 0,\qquad
 \sum_i p_iF_i = T .$$
@@ -13,14 +13,43 @@ For involute pairs $p_i = r_{b1}\cos\beta_b$ and $q_i = r_{b2}\cos\beta_b$, so
 $\sum F_i = T/(r_{b1}\cos\beta_b)$ and $q\Theta$ is the rigid approach $Z$ along the normal.
 The loaded transmission error is $\mathrm{TE} - \Theta$.
 
-The unknowns are the torque fractions $g_i = p_iF_i/T$ ($\sum g_i = 1$) and $\Theta$, which
-keeps zero torque well posed ($F = 0$, $\Theta$ = the smallest rotation closing a gap = 0).
-Complementarity is the smoothed Fischer–Burmeister equation
-$\phi_\varepsilon(a, b) = a + b - \sqrt{a^2 + b^2 + 2\varepsilon^2} = 0$ on $a_i = ng_i$,
-$b_i = y_i/\bar y$ ($\bar y$ = 1 µm), whose solutions have $a_ib_i = \varepsilon^2$: the
-smoothing $\varepsilon$ (`Accuracy.contact_smoothing`) bounds the complementarity residual.
-Newton (optimistix) with a continuation $\varepsilon$ = 0.1, 0.01, 1e-4 warm-starts the final
-solve at the requested $\varepsilon$, which alone carries the implicit-adjoint gradients.
+**Structure.** Different tooth pairs touch only through the gear's rotation $\Theta$: the
+compliance is block diagonal over pairs, $f = \mathrm{diag}(C_1, \dots, C_K)$, each block
+(slices × slices) a tooth pair's face. Two solvers use it:
+
+* *Diagonal linear model* (`IsoCompliance`; uncoupled slices with a linear contact law):
+  for a given $\Theta$ every point is independent, $F_i = \max(0, (q_i\Theta - e_i)/c_i)$,
+  and the torque $G(\Theta) = \sum_i p_iF_i(\Theta)$ is increasing and piecewise linear with
+  breakpoints $t_i = e_i/q_i$. Sorting the breakpoints, on $[t_{(k)}, t_{(k+1)}]$ the points
+  $(1) \dots (k)$ carry load and $G = S_k\Theta - I_k$ with the cumulative sums
+  $S_k = \sum_{m\le k} p_{(m)}q_{(m)}/c_{(m)}$, $I_k = \sum_{m\le k} p_{(m)}e_{(m)}/c_{(m)}$;
+  the solution is $\Theta = (T + I_k)/S_k$ on the first segment that contains it (strictly:
+  at a breakpoint, the segment to its right, so derivatives are the right-hand ones, e.g.
+  the tangent stiffness of loading from zero torque). Exact, one sort per position,
+  differentiable to every order through the selected segment.
+* *Coupled model* (`SliceCompliance`): a primal–dual active-set method (semi-smooth Newton
+  on $\min(F_i, \kappa y_i) = 0$; Hintermüller, Ito & Kunisch, SIAM J. Optim. 13 (2002) 865)
+  with $\Theta$ outside the blocks. Given the active set $\mathcal A$ (points in contact)
+  and the linearisation of the contact law at the current loads
+  ($a F^{e} \approx a F_0^{e} + D(F - F_0)$), each block solves
+  $(C_k + D_k)_{\mathcal{AA}}F_{\mathcal A} = q_{\mathcal A}\Theta - r_{\mathcal A}$, i.e.
+  $F = u + \Theta w$ from one factorisation with two right-hand sides, and the torque
+  balance gives $\Theta = (T - p\cdot u)/(p\cdot w)$. The new active set is
+  $\{F_i - \kappa y_i > 0\}$ ($\kappa$ the mean point stiffness), always holding the point
+  with the largest $F_i - \kappa y_i$ so that zero torque is solved too ($F = 0$, $\Theta$ =
+  the smallest rotation that closes a gap). It starts from the diagonal model's exact
+  solution with the blocks' diagonals, and stops when the active set repeats and the loads
+  change by less than the Newton tolerances (linear laws: when the set repeats, which is
+  exact). Cost per step: $K$ factorisations of a slices × slices block instead of one of
+  all $K\cdot$slices points.
+
+**Derivatives.** The active set is discrete; on it the solution is a smooth function of the
+data. The iteration runs without derivatives, and its converged value is passed through one
+step $N$ of the same Newton map with the active set fixed, whose derivative with respect
+to the data at the root, $\partial N/\partial\theta = -J^{-1}\partial r/\partial\theta$, is
+the implicit-function derivative (`jax.custom_jvp`; the rule is itself differentiable, so
+second derivatives — used by the impact's velocity gradients — are exact as well). Where
+the active set switches, derivatives are one-sided.
 """
 
 from __future__ import annotations
@@ -28,41 +57,59 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 
-from .._custom_types import Array, Float, Scalar
-from .._solution import ADJOINT
+from .._custom_types import Array, Bool, Float, Scalar
 
-#: deflection scale of the complementarity equations (mm)
-DEFLECTION_SCALE = 1e-3
 #: separations of points without a contact are replaced by this (mm): they take no load
 NO_CONTACT = 1.0
 
 
 class ContactProblem(eqx.Module):
-    """Data of one position's contact problem (see the module docstring)."""
+    """Data of one position's contact problem (see the module docstring). Axes: tooth pair
+    (block), slice.
 
-    compliance: Float[Array, "n n"]
-    nonlinear: Float[Array, " n"]
-    separation: Float[Array, " n"]
-    pinion_arm: Float[Array, " n"]
-    gear_arm: Float[Array, " n"]
+    Attributes:
+        compliance: linear compliance blocks $C_k$ (mm/N), shape (pair, slice, slice).
+        nonlinear: coefficients $a_i$ of the approach $a_iF_i^{e}$ (mm/N^e).
+        separation: initial separations $e_i$ (mm).
+        pinion_arm, gear_arm: $p_i$, $q_i$ (mm; $q_i > 0$).
+        torque: pinion torque $T$ (N·mm).
+        exponent: $e$ (static; 1 for a linear law, whose `nonlinear` is ignored).
+        diagonal: the blocks are diagonal (static): the exact 1-D solver applies when the
+            law is linear.
+    """
+
+    compliance: Float[Array, "pair s s"]
+    nonlinear: Float[Array, "pair s"]
+    separation: Float[Array, "pair s"]
+    pinion_arm: Float[Array, "pair s"]
+    gear_arm: Float[Array, "pair s"]
     torque: Scalar
     exponent: float = eqx.field(static=True, default=1.0)
+    diagonal: bool = eqx.field(static=True, default=False)
 
-    def loads(self, fractions):
-        return self.torque * fractions / self.pinion_arm
+    @property
+    def _floor(self):
+        # smooth positive part keeps loads near zero finite in the Palmgren law's derivative;
+        # the constant is removed so that zero load gives exactly zero approach
+        return 1e-9 * (1.0 + jnp.abs(self.torque) / jnp.mean(self.pinion_arm))
 
-    def gaps(self, fractions, rotation):
-        loads = self.loads(fractions)
-        y = self.compliance @ loads + self.separation - self.gear_arm * rotation
-        if self.exponent != 1.0:
-            # smooth positive part keeps Newton iterates with F < 0 finite; the constant is
-            # removed so that zero load gives exactly zero approach
-            floor = 1e-9 * (1.0 + jnp.abs(self.torque) / jnp.mean(self.pinion_arm))
-            positive = soft_positive(loads, floor)
-            y = y + self.nonlinear * (positive**self.exponent - (0.5 * floor) ** self.exponent)
-        return y
+    def approach(self, loads):
+        """Nonlinear contact approach $a(F_+^{e} - (f/2)^e)$ (mm) and its derivative
+        $\\mathrm dF$ (mm/N), with $F_+$ = `soft_positive`$(F, f)$."""
+        if self.exponent == 1.0:
+            zero = jnp.zeros_like(loads)
+            return zero, zero
+        floor = self._floor
+        positive = soft_positive(loads, floor)
+        slope = 0.5 * (1.0 + loads / jnp.sqrt(loads * loads + floor * floor))
+        value = self.nonlinear * (positive**self.exponent - (0.5 * floor) ** self.exponent)
+        return value, self.nonlinear * self.exponent * positive ** (self.exponent - 1.0) * slope
+
+    def gaps(self, loads, rotation):
+        """$y_i$ (mm) for loads $F$ (pair, slice) and the gear's extra lag $\\Theta$ (rad)."""
+        linear = jnp.einsum("kij,kj->ki", self.compliance, loads)
+        return linear + self.approach(loads)[0] + self.separation - self.gear_arm * rotation
 
 
 def soft_positive(x, floor):
@@ -73,80 +120,145 @@ def soft_positive(x, floor):
     return jnp.where(negative, 0.5 * floor**2 / jnp.where(negative, root - x, 1.0), 0.5 * (x + root))
 
 
-def _scale_rotation(problem):
-    return DEFLECTION_SCALE / jnp.mean(problem.gear_arm)
-
-
-def _residual(x, args):
-    problem, eps = args
-    fractions, rotation = x[:-1], x[-1] * _scale_rotation(problem)
-    n = fractions.shape[-1]
-    a = n * fractions
-    b = problem.gaps(fractions, rotation) / DEFLECTION_SCALE
-    fb = a + b - jnp.sqrt(a * a + b * b + 2 * eps**2)
-    return jnp.concatenate([fb, (jnp.sum(fractions) - 1.0)[None]])
-
-
 class ContactSolution(eqx.Module):
     """Solution of one position.
 
     Attributes:
-        loads: normal loads $F_i$ (N).
-        gaps: $y_i$ (mm), zero (to the smoothing) where loaded.
+        loads: normal loads $F_i$ (N), (pair, slice).
+        gaps: $y_i$ (mm), zero where loaded.
         rotation: extra lag $\\Theta$ of the gear (rad): LTE = TE - rotation.
-        converged: the final Newton solve converged.
+        converged: the active set settled (and, for a nonlinear law, Newton converged)
+            within the step cap.
+        steps: active-set steps taken (0 for the diagonal solver).
     """
 
-    loads: Float[Array, " n"]
-    gaps: Float[Array, " n"]
+    loads: Float[Array, "pair s"]
+    gaps: Float[Array, "pair s"]
     rotation: Scalar
-    converged: Array
+    converged: Bool[Array, ""]
+    steps: Array
 
 
 def solve_with(problem: ContactProblem, accuracy) -> ContactSolution:
-    """`solve_contact` with the settings of an `Accuracy` (smoothing, tolerances, cap)."""
+    """`solve_contact` with the settings of an `Accuracy` (tolerances, step cap)."""
     return solve_contact(
-        problem,
-        smoothing=accuracy.contact_smoothing,
-        rtol=accuracy.newton_rtol,
-        atol=accuracy.newton_atol,
-        max_steps=accuracy.contact_max_steps,
+        problem, rtol=accuracy.newton_rtol, atol=accuracy.newton_atol, max_steps=accuracy.contact_max_steps
     )
 
 
-def solve_contact(problem: ContactProblem, *, smoothing: float, rtol: float, atol: float, max_steps: int) -> ContactSolution:
-    """Solve one position's contact problem (differentiable by the implicit adjoint)."""
-    dtype = problem.separation.dtype
-    weights = jax.nn.softmax(-(problem.separation - jnp.min(problem.separation)) / DEFLECTION_SCALE)
-    gaps0 = problem.gaps(weights, jnp.zeros((), dtype))
-    rotation0 = jnp.sum(weights * gaps0 / problem.gear_arm) / _scale_rotation(problem)
-    x = jnp.concatenate([weights, rotation0[None]])
-    solver = optx.Newton(rtol=rtol, atol=atol)
+def _diagonal_solution(problem: ContactProblem):
+    """Exact solution of the diagonal linear problem with point compliances $c_i$ (the
+    blocks' diagonals): returns $(F, \\Theta)$ (see the module docstring)."""
+    c = jnp.diagonal(problem.compliance, axis1=-2, axis2=-1).reshape(-1)
+    e = problem.separation.reshape(-1)
+    p = problem.pinion_arm.reshape(-1)
+    q = problem.gear_arm.reshape(-1)
+    order = jnp.argsort(jax.lax.stop_gradient(e / q))
+    c, e, p, q = c[order], e[order], p[order], q[order]
+    slope = jnp.cumsum(p * q / c)
+    intercept = jnp.cumsum(p * e / c)
+    theta = (problem.torque + intercept) / slope
+    following = jnp.concatenate([(e / q)[1:], jnp.full((1,), jnp.inf, e.dtype)])
+    # strictly inside: at a breakpoint (zero torque on equal separations, say) the segment
+    # to its right, so that derivatives are the right-hand ones (loading from that state)
+    segment = jnp.argmax(jax.lax.stop_gradient(theta) < jax.lax.stop_gradient(following))
+    rotation = theta[segment]
+    c0 = jnp.diagonal(problem.compliance, axis1=-2, axis2=-1)
+    loads = jnp.maximum((problem.gear_arm * rotation - problem.separation) / c0, 0.0)
+    return loads, rotation
 
-    def stage(x, eps):
-        sol = optx.root_find(
-            _residual, solver, x, args=(problem, eps), max_steps=max_steps, throw=False, adjoint=ADJOINT
-        )
-        return sol.value, None
 
-    stages = jnp.maximum(jnp.asarray([1e-1, 1e-2, 1e-4], dtype=dtype), smoothing)
-    x, _ = jax.lax.scan(stage, x, stages)
-    x = jax.lax.stop_gradient(x)
-    sol = optx.root_find(
-        _residual, solver, x, args=(problem, jnp.asarray(smoothing, dtype)), max_steps=max_steps,
-        throw=False, adjoint=ADJOINT,
-    )
-    fractions, rotation = sol.value[:-1], sol.value[-1] * _scale_rotation(problem)
-    converged = sol.result == optx.RESULTS.successful
-    # Zero torque: no load, and the gear rotates just until the first gap closes (zero: the
-    # separations count from the binding contact). Exact in value; the derivative with
-    # respect to the torque (the initial compliance) still comes from the smooth solve.
+def _newton_map(problem: ContactProblem, loads, rotation, active):
+    """One step of the active-set Newton method with the active set `active` fixed: the
+    loads and rotation that solve the problem linearised at `loads` (module docstring).
+    `rotation` is not used: $\\Theta$ is eliminated through the torque balance."""
+    del rotation
+    value, slope = problem.approach(loads)
+    matrix = problem.compliance + jax.vmap(jnp.diag)(slope)
+    a = active.astype(loads.dtype)
+    eye = jnp.eye(loads.shape[-1], dtype=loads.dtype)
+    masked = a[:, :, None] * a[:, None, :] * matrix + (1.0 - a)[:, :, None] * eye
+    residual = slope * loads - value - problem.separation
+    rhs = jnp.stack([a * residual, a * problem.gear_arm], axis=-1)
+    solved = jnp.linalg.solve(masked, rhs)
+    u, w = solved[..., 0], solved[..., 1]
+    rotation = (problem.torque - jnp.sum(problem.pinion_arm * u)) / jnp.sum(problem.pinion_arm * w)
+    return u + rotation * w, rotation
+
+
+def _active_set(problem: ContactProblem, loads, rotation, stiffness):
+    """$\\{F_i - \\kappa y_i > 0\\}$, always with the point of the largest value."""
+    score = loads - stiffness * problem.gaps(loads, rotation)
+    return (score > 0) | (score == jnp.max(score))
+
+
+@eqx.filter_custom_jvp
+def _implicit(problem: ContactProblem, loads, rotation, active):
+    """Identity in value on the converged `(loads, rotation)`; derivatives by the implicit
+    function theorem through one Newton step (module docstring)."""
+    return loads, rotation
+
+
+@_implicit.def_jvp
+def _implicit_jvp(primals, tangents):
+    problem, loads, rotation, active = primals
+    t_problem = tangents[0]
+    out = _implicit(problem, loads, rotation, active)
+    _, t_out = eqx.filter_jvp(lambda pr: _newton_map(pr, out[0], out[1], active), (problem,), (t_problem,))
+    return out, t_out
+
+
+def _exact_when_idle(problem: ContactProblem, loads, rotation):
+    """At zero torque: no load and the gear rotated just until the first gap closes,
+    exactly in value (equal separations would otherwise share zero load as round-off of
+    either sign); derivatives are kept (the tangent compliance of loading from rest)."""
     idle = problem.torque == 0
     exact = jnp.min(problem.separation / problem.gear_arm)
+    loads = loads - jax.lax.stop_gradient(jnp.where(idle, loads, 0.0))
     rotation = rotation + jax.lax.stop_gradient(jnp.where(idle, exact - rotation, 0.0))
+    return loads, rotation
+
+
+def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_steps: int) -> ContactSolution:
+    """Solve one position's contact problem exactly (module docstring).
+
+    Args:
+        problem: the position's data.
+        rtol, atol: tolerances on the change of the loads between Newton steps, relative to
+            the largest load and in units of it (nonlinear laws only; floored at 16 machine
+            epsilons).
+        max_steps: cap on the active-set steps.
+    """
+    dtype = problem.separation.dtype
+    if problem.diagonal and problem.exponent == 1.0:
+        loads, rotation = _exact_when_idle(problem, *_diagonal_solution(problem))
+        return ContactSolution(
+            loads=loads, gaps=problem.gaps(loads, rotation), rotation=rotation,
+            converged=jnp.asarray(True), steps=jnp.asarray(0),
+        )
+    eps = float(jnp.finfo(dtype).eps)
+    rtol, atol = max(rtol, 16 * eps), max(atol, 16 * eps)
+    frozen = jax.tree_util.tree_map(jax.lax.stop_gradient, problem)
+    stiffness = 1.0 / jnp.mean(jnp.diagonal(frozen.compliance, axis1=-2, axis2=-1))
+    loads0, rotation0 = _diagonal_solution(frozen)
+    active0 = _active_set(frozen, loads0, rotation0, stiffness)
+
+    def step(carry):
+        loads, rotation, active, _, i = carry
+        new_loads, new_rotation = _newton_map(frozen, loads, rotation, active)
+        new_active = _active_set(frozen, new_loads, new_rotation, stiffness)
+        settled = jnp.all(new_active == active)
+        if problem.exponent != 1.0:
+            scale = jnp.max(jnp.abs(new_loads))
+            settled = settled & (jnp.max(jnp.abs(new_loads - loads)) <= rtol * scale + atol * (1.0 + scale))
+        return new_loads, new_rotation, new_active, settled, i + 1
+
+    def more(carry):
+        return (~carry[3]) & (carry[4] < max_steps)
+
+    init = (loads0, rotation0, active0, jnp.asarray(False), jnp.asarray(0))
+    loads, rotation, active, settled, steps = jax.lax.while_loop(more, step, init)
+    loads, rotation = _exact_when_idle(problem, *_implicit(problem, loads, rotation, active))
     return ContactSolution(
-        loads=problem.loads(fractions),
-        gaps=problem.gaps(fractions, rotation),
-        rotation=rotation,
-        converged=converged | idle,
+        loads=loads, gaps=problem.gaps(loads, rotation), rotation=rotation, converged=settled, steps=steps
     )
