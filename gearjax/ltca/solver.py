@@ -146,10 +146,11 @@ def solve_with(problem: ContactProblem, accuracy) -> ContactSolution:
     )
 
 
-def _diagonal_solution(problem: ContactProblem):
-    """Exact solution of the diagonal linear problem with point compliances $c_i$ (the
-    blocks' diagonals): returns $(F, \\Theta)$ (see the module docstring)."""
-    c = jnp.diagonal(problem.compliance, axis1=-2, axis2=-1).reshape(-1)
+def _diagonal_solution(problem: ContactProblem, point_compliance):
+    """Exact solution of the diagonal linear problem with the point compliances $c_i$
+    `point_compliance` (pair, slice): returns $(F, \\Theta)$ (see the module docstring)."""
+    c0 = point_compliance
+    c = c0.reshape(-1)
     e = problem.separation.reshape(-1)
     p = problem.pinion_arm.reshape(-1)
     q = problem.gear_arm.reshape(-1)
@@ -163,7 +164,6 @@ def _diagonal_solution(problem: ContactProblem):
     # to its right, so that derivatives are the right-hand ones (loading from that state)
     segment = jnp.argmax(jax.lax.stop_gradient(theta) < jax.lax.stop_gradient(following))
     rotation = theta[segment]
-    c0 = jnp.diagonal(problem.compliance, axis1=-2, axis2=-1)
     loads = jnp.maximum((problem.gear_arm * rotation - problem.separation) / c0, 0.0)
     return loads, rotation
 
@@ -231,7 +231,8 @@ def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_step
     """
     dtype = problem.separation.dtype
     if problem.diagonal and problem.exponent == 1.0:
-        loads, rotation = _exact_when_idle(problem, *_diagonal_solution(problem))
+        compliance = jnp.diagonal(problem.compliance, axis1=-2, axis2=-1)
+        loads, rotation = _exact_when_idle(problem, *_diagonal_solution(problem, compliance))
         return ContactSolution(
             loads=loads, gaps=problem.gaps(loads, rotation), rotation=rotation,
             converged=jnp.asarray(True), steps=jnp.asarray(0),
@@ -239,8 +240,12 @@ def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_step
     eps = float(jnp.finfo(dtype).eps)
     rtol, atol = max(rtol, 16 * eps), max(atol, 16 * eps)
     frozen = jax.tree_util.tree_map(jax.lax.stop_gradient, problem)
-    stiffness = 1.0 / jnp.mean(jnp.diagonal(frozen.compliance, axis1=-2, axis2=-1))
-    loads0, rotation0 = _diagonal_solution(frozen)
+    # start: the exact diagonal solution with each point's own compliance, the contact
+    # law's tangent at the mean load included (so a rigid tooth with a contact law works)
+    mean_load = jnp.abs(frozen.torque) / jnp.sum(frozen.pinion_arm) + frozen._floor
+    compliance = jnp.diagonal(frozen.compliance, axis1=-2, axis2=-1) + frozen.approach(jnp.full_like(frozen.separation, mean_load))[1]
+    stiffness = 1.0 / jnp.mean(compliance)
+    loads0, rotation0 = _diagonal_solution(frozen, compliance)
     active0 = _active_set(frozen, loads0, rotation0, stiffness)
 
     def step(carry):
