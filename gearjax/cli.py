@@ -9,14 +9,18 @@ scene file prints one line naming the field and exits with status 2. `reproduce`
 reproductions of `gearjax.papers` (the command is presentation: it may import the papers
 package, the core may not).
 
-Compiled programs are stored in JAX's persistent compilation cache (`gearjax.cache`:
-`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`), so a second run of the same scene
-structure loads its program instead of compiling it; `--no-cache` disables that.
+Programs are cached on disk (`gearjax.cache`: `$GEARJAX_CACHE_DIR`, default
+`~/.cache/gearjax/jax`): JAX's persistent compilation cache holds the compiled programs and
+gearjax's program cache (`programs/`) the traced ones, so a second run of the same scene
+structure neither traces nor compiles; `--no-cache` disables both. The program cache is
+enabled for the command's own call only, so calling `main` in a process (tests, notebooks)
+leaves the process's setting as it was.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 
@@ -36,7 +40,13 @@ def _enable_cache(args: argparse.Namespace) -> None:
     from .cache import _cache_started, enable_compilation_cache
 
     if not args.no_cache and not _cache_started():
-        enable_compilation_cache()
+        enable_compilation_cache(programs=False)
+
+
+def _program_cache(args: argparse.Namespace) -> contextlib.AbstractContextManager:
+    from .cache import program_cache
+
+    return program_cache(enabled=not args.no_cache)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -93,14 +103,15 @@ def main(argv: list[str] | None = None) -> int:
     for command in (run, rep):
         command.add_argument(
             "--no-cache", action="store_true",
-            help="do not use the persistent compilation cache ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
+            help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
         )
     args = parser.parse_args(argv)
     _enable_x64()
     _enable_cache(args)
-    if args.command == "run":
-        return _run(args)
-    return _reproduce(args)
+    with _program_cache(args):
+        if args.command == "run":
+            return _run(args)
+        return _reproduce(args)
 
 
 if __name__ == "__main__":
