@@ -1,11 +1,22 @@
-"""The command line's programs are cacheable: a second process loads the compiled program
-from JAX's persistent compilation cache (counted from JAX's own monitoring events)."""
+"""The command line's programs are cacheable: a second process loads the traced program from
+gearjax's program cache and the compiled one from JAX's persistent compilation cache (counted
+from gearjax's and JAX's own counters), and gets the same numbers; the program cache's key
+separates what traces differently."""
 
 import json
+import math
 import os
 import subprocess
 import sys
 import textwrap
+
+import jax
+import jax.numpy as jnp
+import pytest
+
+import gearjax as gj
+from gearjax import cache
+from gearjax.scene import _prepare, _simulate
 
 SCENE = """\
 [pair]
@@ -31,7 +42,9 @@ PROBE = textwrap.dedent(
         counts[event] = counts.get(event, 0) + 1
     jax.monitoring.register_event_listener(listen)
     from gearjax.cli import main
+    from gearjax.cache import program_cache_info
     code = main(["run", sys.argv[1], "--json"] + sys.argv[2:])
+    counts.update({"program_cache/" + k: v for k, v in program_cache_info().items()})
     print("EVENTS " + json.dumps(counts), file=sys.stderr)
     sys.exit(code)
     """
@@ -48,16 +61,152 @@ def _run(scene, cache_dir, *extra):
     return json.loads(out.stdout), json.loads(line[len("EVENTS "):])
 
 
+def _files(directory):
+    return sorted(str(p.relative_to(directory)) for p in directory.rglob("*") if p.is_file())
+
+
 def test_second_run_loads_the_program_from_the_cache(tmp_path):
     scene = tmp_path / "scene.toml"
     scene.write_text(SCENE)
-    cache = tmp_path / "cache"
-    first, events1 = _run(scene, cache)
+    cache_dir = tmp_path / "cache"
+    first, events1 = _run(scene, cache_dir)
     assert events1.get("/jax/compilation_cache/cache_hits", 0) == 0
-    assert any(cache.iterdir()), "the first run wrote no program to the cache"
-    second, events2 = _run(scene, cache)
+    assert events1["program_cache/misses"] == 1 and events1["program_cache/writes"] == 1
+    assert events1["program_cache/hits"] == 0
+    assert any(cache_dir.glob("*-cache")), "the first run wrote no compiled program"
+    assert len(list((cache_dir / cache.PROGRAMS_SUBDIR).iterdir())) == 1, "the first run wrote no traced program"
+    second, events2 = _run(scene, cache_dir)
+    # the traced program is loaded, not traced again, and its compilation is found in JAX's cache
+    assert events2["program_cache/loads"] == 1 and events2["program_cache/hits"] == 1
+    assert events2["program_cache/misses"] == 0 and events2["program_cache/writes"] == 0
     assert events2.get("/jax/compilation_cache/cache_hits", 0) >= 1
-    assert second["tca"]["te_um"] == first["tca"]["te_um"]  # the same program, the same numbers
-    # --no-cache: the warm cache is not read
-    _, events3 = _run(scene, cache, "--no-cache")
+    assert second == first  # the same program, the same numbers (every float of the JSON, exactly)
+    # --no-cache: the warm caches are neither read nor written
+    files = _files(cache_dir)
+    third, events3 = _run(scene, cache_dir, "--no-cache")
     assert events3.get("/jax/compilation_cache/cache_hits", 0) == 0
+    assert all(events3[f"program_cache/{k}"] == 0 for k in ("hits", "loads", "misses", "writes", "bypassed"))
+    assert _files(cache_dir) == files
+    assert third["tca"]["te_um"] == pytest.approx(first["tca"]["te_um"], rel=1e-9, abs=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# The key: computed without tracing, so these are cheap.
+
+
+def _scene(**kwargs):
+    pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 20.0)
+    kwargs.setdefault("accuracy", "fast")
+    return gj.Scene(pair, **kwargs)
+
+
+def _key_of(scene):
+    scene = _prepare(scene)
+    leaves, treedef = jax.tree_util.tree_flatten(scene)
+    return cache._key(_simulate, "simulate", treedef, leaves)
+
+
+@pytest.fixture(scope="module")
+def base_key():
+    return _key_of(_scene())
+
+
+def test_key_is_the_same_for_a_rebuilt_scene_of_the_same_structure(base_key):
+    pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 21.0)  # other values, same structure
+    assert _key_of(gj.Scene(pair, accuracy="fast")) == base_key
+
+
+@pytest.mark.parametrize(
+    "change",
+    ["accuracy", "slices", "dtype", "modification", "torque", "pitches", "teeth", "shape"],
+)
+def test_key_changes_with_what_traces_differently(base_key, change):
+    fast = gj.Accuracy.preset("fast")
+    if change == "accuracy":
+        scene = _scene(accuracy="default")
+    elif change == "slices":
+        scene = _scene(accuracy=fast.replace(face_slices=11))
+    elif change == "dtype":
+        scene = _scene(accuracy=fast.replace(dtype="float32"))
+    elif change == "modification":
+        scene = _scene(modification=gj.FlankModification(tip_relief=0.008, tip_relief_length=3.0))
+    elif change == "torque":
+        scene = _scene(operating=gj.OperatingPoint(torque=100e3))
+    elif change == "pitches":
+        scene = _scene(pitches=2)
+    elif change == "teeth":
+        scene = gj.Scene(gj.InvoluteGearPair((23, 43), 4.0, 20.0, 12.0, 20.0), accuracy="fast")
+    else:  # the same structure with batched leaves
+        scene = jax.tree_util.tree_map(lambda x: jnp.stack([x, x]), _scene())
+    assert _key_of(scene) != base_key
+
+
+def test_key_follows_the_gearjax_sources_and_jax_settings(base_key, monkeypatch):
+    with monkeypatch.context() as patch:
+        patch.setattr(cache, "_package_digest", lambda: "edited")
+        cache._environment.cache_clear()
+        assert _key_of(_scene()) != base_key  # an edited source file never loads an old program
+    cache._environment.cache_clear()
+    assert _key_of(_scene()) == base_key
+    with jax.numpy_dtype_promotion("standard"):  # the tests run with "strict"
+        assert _key_of(_scene()) != base_key
+    single = _scene(accuracy=gj.Accuracy.preset("fast").replace(dtype="float32"))
+    with jax.enable_x64(False):  # how simulate traces a float32 scene
+        key_32 = _key_of(single)
+    assert _key_of(single) != key_32
+
+
+KEY_PROBE = textwrap.dedent(
+    """
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    import gearjax as gj
+    from gearjax import cache
+    from gearjax.scene import _prepare, _simulate
+    pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 20.0)
+    scene = _prepare(gj.Scene(pair, operating=gj.OperatingPoint(torque=100e3), effects=("impact",), accuracy="fast"))
+    leaves, treedef = jax.tree_util.tree_flatten(scene)
+    print(cache._key(_simulate, "simulate", treedef, leaves))
+    """
+)
+
+
+def test_key_is_the_same_in_processes_with_other_hash_seeds():
+    # the effects are a frozenset, whose iteration order follows the string hash seed
+    keys = set()
+    for seed in ("1", "2"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        out = subprocess.run([sys.executable, "-c", KEY_PROBE], env=env, capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr[-2000:]
+        keys.add(out.stdout.strip().splitlines()[-1])
+    assert len(keys) == 1
+
+
+def test_static_values_that_cannot_be_keyed_bypass_the_cache():
+    with pytest.raises(cache._Uncacheable):
+        cache._canon(lambda x: x)
+    with pytest.raises(cache._Uncacheable):
+        cache._canon(object())
+    assert cache._canon(frozenset({"ltca", "impact"})) == cache._canon(frozenset({"impact", "ltca"}))
+    assert cache._canon(0.1) != cache._canon(math.nextafter(0.1, 1.0))
+    assert cache._canon((1, 2)) != cache._canon([1, 2]) != cache._canon((1.0, 2.0))
+    assert cache._canon(gj.Accuracy.preset("fast")) != cache._canon(gj.Accuracy.preset("default"))
+
+
+def test_calls_under_a_transformation_bypass_the_cache(tmp_path):
+    scene = _scene(accuracy=gj.Accuracy.preset("fast").replace(positions_per_pitch=4, face_slices=3))
+    before = cache.program_cache_info()
+    with cache.program_cache(path=tmp_path) as directory:
+        assert directory == tmp_path
+        jax.eval_shape(gj.simulate, scene)  # traced leaves: nothing loaded, nothing stored
+    after = cache.program_cache_info()
+    assert after["bypassed"] == before["bypassed"] + 1
+    assert after["misses"] == before["misses"] and after["writes"] == before["writes"]
+    assert list(tmp_path.iterdir()) == []
+    assert cache.program_cache_dir() is None  # the block's setting is gone
+
+
+def test_the_program_cache_is_off_unless_asked_for():
+    import gearjax  # noqa: F401
+
+    assert cache.program_cache_dir() is None
