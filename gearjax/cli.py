@@ -33,20 +33,39 @@ def _enable_x64() -> None:
     jax.config.update("jax_enable_x64", True)
 
 
-def _enable_cache(args: argparse.Namespace) -> None:
-    # A fresh process (the command's normal case) gets the persistent cache; when the
-    # command is called in a process that has already compiled programs (tests, notebooks)
-    # the process's own setting stays.
-    from .cache import _cache_started, enable_compilation_cache
+#: The command stores even its quickest compilations: building and reporting a scene runs
+#: about a hundred small eager operations, each compiled in tens of ms, which together cost
+#: more than the traced program's load (the library's default skips them, see
+#: `gearjax.cache.MIN_COMPILE_TIME_S`).
+COMMAND_MIN_COMPILE_TIME_S = 0.0
 
-    if not args.no_cache and not _cache_started():
+
+@contextlib.contextmanager
+def _caches(args: argparse.Namespace):
+    """The compilation and program caches for the command's own work, unless --no-cache.
+
+    A fresh process (the command's normal case) gets the persistent cache; when the command
+    is called in a process that has already compiled programs (tests, notebooks) the
+    process's cache directory stays. The program cache and the lower compile-time threshold
+    apply inside the command only: on return the process's settings are as they were."""
+    import jax
+
+    from .cache import _cache_started, enable_compilation_cache, program_cache
+
+    if args.no_cache:
+        with program_cache(enabled=False):
+            yield
+        return
+    if not _cache_started():
         enable_compilation_cache(programs=False)
-
-
-def _program_cache(args: argparse.Namespace) -> contextlib.AbstractContextManager:
-    from .cache import program_cache
-
-    return program_cache(enabled=not args.no_cache)
+    option = "jax_persistent_cache_min_compile_time_secs"
+    previous = getattr(jax.config, option)
+    jax.config.update(option, COMMAND_MIN_COMPILE_TIME_S)
+    try:
+        with program_cache():
+            yield
+    finally:
+        jax.config.update(option, previous)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -107,8 +126,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     args = parser.parse_args(argv)
     _enable_x64()
-    _enable_cache(args)
-    with _program_cache(args):
+    with _caches(args):
         if args.command == "run":
             return _run(args)
         return _reproduce(args)

@@ -210,3 +210,17 @@ def test_the_program_cache_is_off_unless_asked_for():
     import gearjax  # noqa: F401
 
     assert cache.program_cache_dir() is None
+
+
+def test_the_command_leaves_the_process_settings_as_they_were(tmp_path, capsys):
+    from gearjax.cli import main
+
+    path = tmp_path / "bad.toml"
+    path.write_text("[pair]\nteeth = [29]\nnormal_module = 5.0\n")
+    assert main(["run", str(path)]) == 2  # fails while reading the scene, inside the caches' scope
+    threshold = jax.config.jax_persistent_cache_min_compile_time_secs  # JAX's cache stays enabled
+    assert threshold > 0.0
+    assert main(["run", str(path)]) == 2
+    assert cache.program_cache_dir() is None  # the command's own settings are gone
+    assert jax.config.jax_persistent_cache_min_compile_time_secs == threshold
+    capsys.readouterr()
