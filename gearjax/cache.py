@@ -24,8 +24,10 @@ and compiling it with XLA (about a minute on a 2-core CPU). Two caches on disk r
   with no file (a notebook cell, `python -c`) or a static value that cannot be keyed (a
   lambda, an arbitrary object) bypasses the cache.
 
-The command line enables both by default (`gearjax ... --no-cache` disables both); the
-library never changes JAX's configuration on import, so in Python they are opt-in:
+The command line enables both by default, and while it runs it stores even its quickest
+compilations (the scene's checks and the report run about a hundred small eager programs;
+`gearjax ... --no-cache` disables all of it). The library never changes JAX's
+configuration on import, so in Python the caches are opt-in:
 
     import gearjax as gj
     gj.enable_compilation_cache()          # before the first computation; both caches
@@ -39,6 +41,17 @@ The program cache applies only to a top-level call of `simulate` on concrete arr
 `jax_debug_nans`/`jax_debug_infs`, `simulate` traces as without it. `program_cache_info()`
 counts its hits, misses, writes and bypasses in this process, and logger
 `gearjax.cache` says (at INFO) what was loaded or stored.
+
+What the key cannot see: code outside gearjax that tracing runs but that is not the module
+of a class in the scene (a helper module that a user's family imports), and functions
+monkeypatched at run time. Disable the program cache while editing such code.
+
+On a 2-core CPU shared with other jobs (load 4-7; rough), a warm `gearjax run` of the
+default scene took 8-16 s instead of 31-57 s without the program cache; what remains is
+mostly loading the compiled executable from JAX's cache (2-7 s: the default scene's
+executable is 22 MB), importing JAX/equinox/optimistix (about 2.5 s), building and
+checking the scene (about 2 s of small eager programs) and lowering the loaded program's
+call (about 1.5 s).
 
 The cache directory is `$GEARJAX_CACHE_DIR` if set, else `$XDG_CACHE_HOME/gearjax/jax`
 (`~/.cache/gearjax/jax`); the program cache uses its subdirectory `programs/` (one file
