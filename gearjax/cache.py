@@ -9,10 +9,10 @@ and compiling it with XLA (about a minute on a 2-core CPU). Two caches on disk r
   stores a program that contains a host callback, which is why gearjax's programs report
   solver failures as result codes (`gearjax.RESULTS`) instead of runtime checks.
 * **gearjax's program cache** stores the traced and lowered program of `simulate`
-  (`jax.export`: the StableHLO bytecode and its calling convention) with the structure of
-  its result, so a later process neither traces nor lowers `simulate`: it loads the
-  program, calls it (its compilation is then found in JAX's cache) and rebuilds the
-  `SimulationResult`. Cold or warm, the exported program is what runs, so both give the
+  (`jax.export.Exported.serialize()`: the StableHLO bytecode and its calling convention)
+  with the structure of its result, so a later process neither traces nor lowers
+  `simulate`: it loads the program, calls it (its compilation is then found in JAX's
+  cache) and rebuilds the `SimulationResult`. Cold or warm, the exported program is what runs, so both give the
   same numbers; `simulate(throw=...)` checks them afterwards as ever. An entry is keyed by a
   SHA-256 of everything the program depends on: the scene's pytree structure with every
   static field (`Accuracy`, effects, tooth counts, ...), its arrays' shapes and dtypes, the
@@ -56,7 +56,8 @@ call (about 1.5 s).
 The cache directory is `$GEARJAX_CACHE_DIR` if set, else `$XDG_CACHE_HOME/gearjax/jax`
 (`~/.cache/gearjax/jax`); the program cache uses its subdirectory `programs/` (one file
 per scene structure, about 1 MB for the default scene, written atomically: a temporary
-file, then `os.replace`). Delete the directory to reclaim space.
+file, then `os.replace`); an entry of another format or key, or one that fails to load, is
+a miss (and is replaced), never an error. Delete the directory to reclaim space.
 Like JAX's cache, the program cache loads what it finds there (the entries are pickles), so
 the directory must be writable only by its user.
 """
@@ -90,7 +91,8 @@ MIN_COMPILE_TIME_S = 0.2
 #: Subdirectory of the cache directory that holds the program cache's entries.
 PROGRAMS_SUBDIR = "programs"
 #: Version of the program cache's entry format and key; bumping it orphans old entries.
-_FORMAT = 1
+#: 1: private fields of `jax.export.Exported`; 2: `Exported.serialize()`.
+_FORMAT = 2
 _SUFFIX = ".gjprog"
 
 logger = logging.getLogger(__name__)
@@ -287,15 +289,14 @@ def cached_call(fn: Callable[[Any], Any], tree: Any, *, name: str) -> Any:
 
     start = time.perf_counter()
     try:
-        exported, structure = _export(fn, treedef, leaves)
-        fields = _exported_fields(exported)
+        exported, serialized, structure = _export(fn, treedef, leaves)
     except _ExportFailed as err:
         _info["bypassed"] += 1
         logger.warning("program cache: %s could not be exported (%s); running it uncached", name, err)
         return fn(tree)
     _info["misses"] += 1
     logger.info("program cache: traced and exported %s in %.1f s", name, time.perf_counter() - start)
-    _store(path, key, fields, structure)
+    _store(path, key, serialized, structure)
     program = (jax.jit(exported.call), structure)
     outputs = program[0](*arrays)
     _programs[(path, key)] = program
@@ -324,8 +325,8 @@ class _ExportFailed(Exception):
 
 
 def _export(fn, treedef, leaves):
-    """Trace, lower and export `fn` as a function of the tree's array leaves (flat), and
-    the structure of its result with `_Slot`s where its arrays go."""
+    """Trace, lower, export and serialize `fn` as a function of the tree's array leaves
+    (flat), with the structure of its result with `_Slot`s where its arrays go."""
     import equinox as eqx
     from jax import export
 
@@ -354,76 +355,12 @@ def _export(fn, treedef, leaves):
     flat_fn.__name__ = flat_fn.__qualname__ = getattr(fn, "__name__", "program")
     try:
         exported = export.export(jax.jit(flat_fn))(*specs)
+        serialized = bytes(exported.serialize())
     except Exception as err:
         if not structures:
             raise  # the function itself failed to trace: the user's error, not the cache's
         raise _ExportFailed(f"{type(err).__name__}: {err}") from err
-    return exported, structures[0]
-
-
-# `Exported.serialize()` needs the optional `flatbuffers` package; an entry stores instead
-# the fields that a single-device program without effects has, and rebuilds the
-# `Exported` from them (its flat calling convention is fixed by `_export`). The key holds
-# JAX's version, so the fields always meet the `Exported` they were taken from.
-_EXPORTED_PLAIN = (
-    "fun_name",
-    "nr_devices",
-    "platforms",
-    "mlir_module_serialized",
-    "calling_convention_version",
-    "module_kept_var_idx",
-    "uses_global_constants",
-)
-
-
-def _exported_fields(exported) -> dict:
-    shardings = (*exported._in_named_shardings, *exported._out_named_shardings,
-                 *exported.in_shardings_hlo, *exported.out_shardings_hlo)
-    if any(sharding is not None for sharding in shardings):
-        raise _ExportFailed("a sharded program")
-    if exported.ordered_effects or exported.unordered_effects or exported.disabled_safety_checks:
-        raise _ExportFailed("a program with effects")
-    n_in, n_out = len(exported.in_avals), len(exported.out_avals)
-    if (exported.in_tree != jax.tree_util.tree_structure((tuple(range(n_in)), {}))
-            or exported.out_tree != jax.tree_util.tree_structure(list(range(n_out)))):
-        raise _ExportFailed("unexpected calling convention")
-    fields = {name: getattr(exported, name) for name in _EXPORTED_PLAIN}
-    fields["in_avals"] = tuple(_aval_fields(aval) for aval in exported.in_avals)
-    fields["out_avals"] = tuple(_aval_fields(aval) for aval in exported.out_avals)
-    return fields
-
-
-def _aval_fields(aval) -> tuple:
-    if not all(isinstance(d, int) for d in aval.shape):
-        raise _ExportFailed("a shape-polymorphic program")
-    return (tuple(aval.shape), str(aval.dtype), bool(aval.weak_type))
-
-
-def _exported_from_fields(fields: dict):
-    import jax.numpy as jnp
-    from jax import export
-
-    def avals(specs):
-        return tuple(jax.core.ShapedArray(shape, jnp.dtype(dtype), weak_type=weak) for shape, dtype, weak in specs)
-
-    in_avals, out_avals = avals(fields["in_avals"]), avals(fields["out_avals"])
-    n_in, n_out = len(in_avals), len(out_avals)
-    return export.Exported(
-        in_tree=jax.tree_util.tree_structure((tuple(range(n_in)), {})),
-        in_avals=in_avals,
-        out_tree=jax.tree_util.tree_structure(list(range(n_out))),
-        out_avals=out_avals,
-        _has_named_shardings=True,
-        _in_named_shardings=(None,) * n_in,
-        _out_named_shardings=(None,) * n_out,
-        in_shardings_hlo=(None,) * n_in,
-        out_shardings_hlo=(None,) * n_out,
-        ordered_effects=(),
-        unordered_effects=(),
-        disabled_safety_checks=(),
-        _get_vjp=None,
-        **{name: fields[name] for name in _EXPORTED_PLAIN},
-    )
+    return exported, serialized, structures[0]
 
 
 def _rebuild(structure, outputs):
@@ -431,11 +368,11 @@ def _rebuild(structure, outputs):
     return treedef.unflatten([outputs[leaf.index] if isinstance(leaf, _Slot) else leaf for leaf in leaves])
 
 
-def _store(path: Path, key: str, fields: dict, structure) -> None:
+def _store(path: Path, key: str, serialized: bytes, structure) -> None:
     start = time.perf_counter()
     try:
         blob = pickle.dumps(
-            {"format": _FORMAT, "key": key, "exported": fields, "structure": structure},
+            {"format": _FORMAT, "key": key, "exported": serialized, "structure": structure},
             protocol=pickle.HIGHEST_PROTOCOL,
         )
     except Exception as err:  # noqa: BLE001 - an unpicklable result only costs the entry
@@ -459,7 +396,8 @@ def _store(path: Path, key: str, fields: dict, structure) -> None:
 
 
 def _load(path: Path, key: str):
-    """The entry's (jitted call, result structure), or None when missing or unusable."""
+    """The entry's (jitted call, result structure), or None when missing or unusable (of
+    another format or key, corrupt, or not deserializable by this JAX)."""
     try:
         blob = path.read_bytes()
     except FileNotFoundError:
@@ -467,17 +405,19 @@ def _load(path: Path, key: str):
     except OSError as err:
         logger.warning("program cache: %s unreadable (%s)", path, err.strerror or err)
         return None
+    from jax import export
+
     start = time.perf_counter()
     try:
         entry = pickle.loads(blob)
-        if entry.get("format") != _FORMAT or entry.get("key") != key:
+        if not isinstance(entry, dict) or entry.get("format") != _FORMAT or entry.get("key") != key:
             raise ValueError("key or format mismatch")
-        exported = _exported_from_fields(entry["exported"])
+        exported = export.deserialize(bytearray(entry["exported"]))
         structure = entry["structure"]
         slots = [leaf for leaf in jax.tree_util.tree_leaves(structure) if isinstance(leaf, _Slot)]
         if sorted(slot.index for slot in slots) != list(range(len(exported.out_avals))):
             raise ValueError("the result structure does not match the program's outputs")
-    except Exception as err:  # noqa: BLE001 - a corrupt entry is a miss, and is replaced
+    except Exception as err:  # noqa: BLE001 - a corrupt or old entry is a miss, and is replaced
         logger.warning("program cache: ignoring %s (%s: %s)", path.name, type(err).__name__, err)
         return None
     logger.info("program cache: loaded %s in %.2f s", path, time.perf_counter() - start)
