@@ -9,12 +9,12 @@ scene file prints one line naming the field and exits with status 2. `reproduce`
 reproductions of `gearjax.papers` (the command is presentation: it may import the papers
 package, the core may not).
 
-Programs are cached on disk (`gearjax.cache`: `$GEARJAX_CACHE_DIR`, default
-`~/.cache/gearjax/jax`): JAX's persistent compilation cache holds the compiled programs and
-gearjax's program cache (`programs/`) the traced ones, so a second run of the same scene
-structure neither traces nor compiles; `--no-cache` disables both. The program cache is
-enabled for the command's own call only, so calling `main` in a process (tests, notebooks)
-leaves the process's setting as it was.
+Programs are cached on disk (`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`): JAX's
+persistent compilation cache (`gearjax.cache`) holds the compiled programs and gearjax's
+program cache (`gearjax.program_cache`, in `programs/`) the traced ones, so a second run
+of the same scene structure neither traces nor compiles; `--no-cache` disables both. The
+program cache is enabled for the command's own call only, so calling `main` in a process
+(tests, notebooks) leaves the process's setting as it was.
 """
 
 from __future__ import annotations
@@ -50,7 +50,8 @@ def _caches(args: argparse.Namespace):
     apply inside the command only: on return the process's settings are as they were."""
     import jax
 
-    from .cache import _cache_started, enable_compilation_cache, program_cache
+    from .cache import _cache_started, enable_compilation_cache
+    from .program_cache import program_cache
 
     if args.no_cache:
         with program_cache(enabled=False):

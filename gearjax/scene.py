@@ -27,7 +27,6 @@ from ._custom_types import ArrayLike
 from ._numerics import as_float
 from ._validate import check_range, is_concrete
 from .accuracy import Accuracy
-from .cache import cached_call
 from .geometry._base import EFFECTS, AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
@@ -36,6 +35,7 @@ from .impact import ImpactResult, impact_analysis
 from .ltca import AbstractCompliance, ContactModel, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .operating import OperatingPoint
+from .program_cache import cached_call
 from .units import Material
 
 
@@ -273,7 +273,7 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     Solver outcomes are named results (`RESULTS`) in each stage's `result` field, computed
     in the compiled program (no host callback, so the program stays cacheable).
 
-    With the program cache on (`gearjax.cache`; the command line's default, opt-in in
+    With the program cache on (`gearjax.program_cache`; the command line's default, opt-in in
     Python) a top-level call loads the traced program of a scene of the same structure
     from disk instead of tracing it again.
 

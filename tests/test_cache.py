@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import pytest
 
 import gearjax as gj
-from gearjax import cache
+from gearjax import _program_key, program_cache
 from gearjax.scene import _prepare, _simulate
 
 SCENE = """\
@@ -42,7 +42,7 @@ PROBE = textwrap.dedent(
         counts[event] = counts.get(event, 0) + 1
     jax.monitoring.register_event_listener(listen)
     from gearjax.cli import main
-    from gearjax.cache import program_cache_info
+    from gearjax.program_cache import program_cache_info
     code = main(["run", sys.argv[1], "--json"] + sys.argv[2:])
     counts.update({"program_cache/" + k: v for k, v in program_cache_info().items()})
     print("EVENTS " + json.dumps(counts), file=sys.stderr)
@@ -76,7 +76,7 @@ def test_second_run_loads_the_program_from_the_cache(tmp_path):
     assert events1["program_cache/misses"] == 1 and events1["program_cache/writes"] == 1
     assert events1["program_cache/hits"] == 0
     assert any(cache_dir.glob("*-cache")), "the first run wrote no compiled program"
-    assert len(list((cache_dir / cache.PROGRAMS_SUBDIR).iterdir())) == 1, "the first run wrote no traced program"
+    assert len(list((cache_dir / program_cache.PROGRAMS_SUBDIR).iterdir())) == 1, "the first run wrote no traced program"
     second, events2 = _run(scene, cache_dir)
     # the traced program is loaded, not traced again, and its compilation is found in JAX's cache
     assert events2["program_cache/loads"] == 1 and events2["program_cache/hits"] == 1
@@ -106,7 +106,7 @@ def _scene(**kwargs):
 def _key_of(scene):
     scene = _prepare(scene)
     leaves, treedef = jax.tree_util.tree_flatten(scene)
-    return cache._key(_simulate, "simulate", treedef, leaves)
+    return program_cache._entry_key(_simulate, "simulate", treedef, leaves)
 
 
 @pytest.fixture(scope="module")
@@ -146,10 +146,10 @@ def test_key_changes_with_what_traces_differently(base_key, change):
 
 def test_key_follows_the_gearjax_sources_and_jax_settings(base_key, monkeypatch):
     with monkeypatch.context() as patch:
-        patch.setattr(cache, "_package_digest", lambda: "edited")
-        cache._environment.cache_clear()
+        patch.setattr(_program_key, "_package_digest", lambda: "edited")
+        _program_key._environment.cache_clear()
         assert _key_of(_scene()) != base_key  # an edited source file never loads an old program
-    cache._environment.cache_clear()
+    _program_key._environment.cache_clear()
     assert _key_of(_scene()) == base_key
     with jax.numpy_dtype_promotion("standard"):  # the tests run with "strict"
         assert _key_of(_scene()) != base_key
@@ -164,12 +164,12 @@ KEY_PROBE = textwrap.dedent(
     import jax
     jax.config.update("jax_enable_x64", True)
     import gearjax as gj
-    from gearjax import cache
+    from gearjax import program_cache
     from gearjax.scene import _prepare, _simulate
     pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 20.0)
     scene = _prepare(gj.Scene(pair, operating=gj.OperatingPoint(torque=100e3), effects=("impact",), accuracy="fast"))
     leaves, treedef = jax.tree_util.tree_flatten(scene)
-    print(cache._key(_simulate, "simulate", treedef, leaves))
+    print(program_cache._entry_key(_simulate, "simulate", treedef, leaves))
     """
 )
 
@@ -186,33 +186,33 @@ def test_key_is_the_same_in_processes_with_other_hash_seeds():
 
 
 def test_static_values_that_cannot_be_keyed_bypass_the_cache():
-    with pytest.raises(cache._Uncacheable):
-        cache._canon(lambda x: x)
-    with pytest.raises(cache._Uncacheable):
-        cache._canon(object())
-    assert cache._canon(frozenset({"ltca", "impact"})) == cache._canon(frozenset({"impact", "ltca"}))
-    assert cache._canon(0.1) != cache._canon(math.nextafter(0.1, 1.0))
-    assert cache._canon((1, 2)) != cache._canon([1, 2]) != cache._canon((1.0, 2.0))
-    assert cache._canon(gj.Accuracy.preset("fast")) != cache._canon(gj.Accuracy.preset("default"))
+    with pytest.raises(_program_key.Uncacheable):
+        _program_key.canon(lambda x: x)
+    with pytest.raises(_program_key.Uncacheable):
+        _program_key.canon(object())
+    assert _program_key.canon(frozenset({"ltca", "impact"})) == _program_key.canon(frozenset({"impact", "ltca"}))
+    assert _program_key.canon(0.1) != _program_key.canon(math.nextafter(0.1, 1.0))
+    assert _program_key.canon((1, 2)) != _program_key.canon([1, 2]) != _program_key.canon((1.0, 2.0))
+    assert _program_key.canon(gj.Accuracy.preset("fast")) != _program_key.canon(gj.Accuracy.preset("default"))
 
 
 def test_calls_under_a_transformation_bypass_the_cache(tmp_path):
     scene = _scene(accuracy=gj.Accuracy.preset("fast").replace(positions_per_pitch=4, face_slices=3))
-    before = cache.program_cache_info()
-    with cache.program_cache(path=tmp_path) as directory:
+    before = program_cache.program_cache_info()
+    with program_cache.program_cache(path=tmp_path) as directory:
         assert directory == tmp_path
         jax.eval_shape(gj.simulate, scene)  # traced leaves: nothing loaded, nothing stored
-    after = cache.program_cache_info()
+    after = program_cache.program_cache_info()
     assert after["bypassed"] == before["bypassed"] + 1
     assert after["misses"] == before["misses"] and after["writes"] == before["writes"]
     assert list(tmp_path.iterdir()) == []
-    assert cache.program_cache_dir() is None  # the block's setting is gone
+    assert program_cache.program_cache_dir() is None  # the block's setting is gone
 
 
 def test_the_program_cache_is_off_unless_asked_for():
     import gearjax  # noqa: F401
 
-    assert cache.program_cache_dir() is None
+    assert program_cache.program_cache_dir() is None
 
 
 def test_the_command_leaves_the_process_settings_as_they_were(tmp_path, capsys):
@@ -224,6 +224,6 @@ def test_the_command_leaves_the_process_settings_as_they_were(tmp_path, capsys):
     threshold = jax.config.jax_persistent_cache_min_compile_time_secs  # JAX's cache stays enabled
     assert threshold > 0.0
     assert main(["run", str(path)]) == 2
-    assert cache.program_cache_dir() is None  # the command's own settings are gone
+    assert program_cache.program_cache_dir() is None  # the command's own settings are gone
     assert jax.config.jax_persistent_cache_min_compile_time_secs == threshold
     capsys.readouterr()
