@@ -6,6 +6,7 @@ separates what traces differently."""
 import json
 import math
 import os
+import pickle
 import subprocess
 import sys
 import textwrap
@@ -207,6 +208,40 @@ def test_calls_under_a_transformation_bypass_the_cache(tmp_path):
     assert after["misses"] == before["misses"] and after["writes"] == before["writes"]
     assert list(tmp_path.iterdir()) == []
     assert program_cache.program_cache_dir() is None  # the block's setting is gone
+
+
+def _doubled(tree):
+    return {"y": tree["x"] * tree["n"], "label": "doubled"}
+
+
+def test_an_entry_round_trips_and_an_old_or_corrupt_one_is_a_miss(tmp_path, monkeypatch):
+    # a tiny program: the entry holds Exported.serialize()'s bytes, read back with
+    # jax.export.deserialize; an entry of another format (1: Exported's private fields)
+    # or a corrupt file is traced again and replaced, never an error
+    tree = {"x": jnp.arange(3.0), "n": 2}
+    monkeypatch.setattr(program_cache, "_programs", {})
+
+    def call():
+        program_cache._programs.clear()  # as in a new process: the entry is read from disk
+        before = program_cache.program_cache_info()
+        out = program_cache.cached_call(_doubled, tree, name="doubled")
+        after = program_cache.program_cache_info()
+        assert out["label"] == "doubled" and out["y"].tolist() == [0.0, 2.0, 4.0]
+        return {k: after[k] - before[k] for k in after}
+
+    miss = {"hits": 0, "loads": 0, "misses": 1, "writes": 1, "bypassed": 0}
+    with program_cache.program_cache(path=tmp_path):
+        assert call() == miss
+        (entry,) = tmp_path.iterdir()
+        stored = pickle.loads(entry.read_bytes())
+        assert stored["format"] == program_cache.FORMAT and isinstance(stored["exported"], bytes)
+        assert call() == {"hits": 1, "loads": 1, "misses": 0, "writes": 0, "bypassed": 0}
+        entry.write_bytes(pickle.dumps({**stored, "format": 1, "exported": {"fun_name": "flat_fn"}}))
+        assert call() == miss
+        entry.write_bytes(b"not a pickle")
+        assert call() == miss
+        assert call()["hits"] == 1  # replaced by a good entry
+    assert [p.name for p in tmp_path.iterdir()] == [entry.name]
 
 
 def test_the_program_cache_is_off_unless_asked_for():
