@@ -9,14 +9,18 @@ scene file prints one line naming the field and exits with status 2. `reproduce`
 reproductions of `gearjax.papers` (the command is presentation: it may import the papers
 package, the core may not).
 
-Compiled programs are stored in JAX's persistent compilation cache (`gearjax.cache`:
-`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`), so a second run of the same scene
-structure loads its program instead of compiling it; `--no-cache` disables that.
+Programs are cached on disk (`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`): JAX's
+persistent compilation cache (`gearjax.cache`) holds the compiled programs and gearjax's
+program cache (`gearjax.program_cache`, in `programs/`) the traced ones, so a second run
+of the same scene structure neither traces nor compiles; `--no-cache` disables both. The
+program cache is enabled for the command's own call only, so calling `main` in a process
+(tests, notebooks) leaves the process's setting as it was.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 
@@ -29,14 +33,40 @@ def _enable_x64() -> None:
     jax.config.update("jax_enable_x64", True)
 
 
-def _enable_cache(args: argparse.Namespace) -> None:
-    # A fresh process (the command's normal case) gets the persistent cache; when the
-    # command is called in a process that has already compiled programs (tests, notebooks)
-    # the process's own setting stays.
-    from .cache import _cache_started, enable_compilation_cache
+#: The command stores even its quickest compilations: building and reporting a scene runs
+#: about a hundred small eager operations, each compiled in tens of ms, which together cost
+#: more than the traced program's load (the library's default skips them, see
+#: `gearjax.cache.MIN_COMPILE_TIME_S`).
+COMMAND_MIN_COMPILE_TIME_S = 0.0
 
-    if not args.no_cache and not _cache_started():
-        enable_compilation_cache()
+
+@contextlib.contextmanager
+def _caches(args: argparse.Namespace):
+    """The compilation and program caches for the command's own work, unless --no-cache.
+
+    A fresh process (the command's normal case) gets the persistent cache; when the command
+    is called in a process that has already compiled programs (tests, notebooks) the
+    process's cache directory stays. The program cache and the lower compile-time threshold
+    apply inside the command only: on return the process's settings are as they were."""
+    import jax
+
+    from .cache import _cache_started, enable_compilation_cache
+    from .program_cache import program_cache
+
+    if args.no_cache:
+        with program_cache(enabled=False):
+            yield
+        return
+    if not _cache_started():
+        enable_compilation_cache(programs=False)
+    option = "jax_persistent_cache_min_compile_time_secs"
+    previous = getattr(jax.config, option)
+    jax.config.update(option, COMMAND_MIN_COMPILE_TIME_S)
+    try:
+        with program_cache():
+            yield
+    finally:
+        jax.config.update(option, previous)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -93,14 +123,14 @@ def main(argv: list[str] | None = None) -> int:
     for command in (run, rep):
         command.add_argument(
             "--no-cache", action="store_true",
-            help="do not use the persistent compilation cache ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
+            help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
         )
     args = parser.parse_args(argv)
     _enable_x64()
-    _enable_cache(args)
-    if args.command == "run":
-        return _run(args)
-    return _reproduce(args)
+    with _caches(args):
+        if args.command == "run":
+            return _run(args)
+        return _reproduce(args)
 
 
 if __name__ == "__main__":

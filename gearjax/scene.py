@@ -35,6 +35,7 @@ from .impact import ImpactResult, impact_analysis
 from .ltca import AbstractCompliance, ContactModel, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .operating import OperatingPoint
+from .program_cache import cached_call
 from .units import Material
 
 
@@ -272,6 +273,10 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     Solver outcomes are named results (`RESULTS`) in each stage's `result` field, computed
     in the compiled program (no host callback, so the program stays cacheable).
 
+    With the program cache on (`gearjax.program_cache`; the command line's default, opt-in in
+    Python) a top-level call loads the traced program of a scene of the same structure
+    from disk instead of tracing it again.
+
     Args:
         scene: the `Scene`.
         throw: check the results once they are concrete: a failed LTCA or impact stage
@@ -287,9 +292,9 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     scene = _prepare(scene)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):
-            result = _simulate(scene)
+            result = cached_call(_simulate, scene, name="simulate")
     else:
-        result = _simulate(scene)
+        result = cached_call(_simulate, scene, name="simulate")
     if throw:
         _check_results(result)
     return result
