@@ -26,17 +26,52 @@ def machine() -> dict:
 
 def time_compiled(fn, *args, repeats: int = 5, warmup: int = 1):
     """(compile seconds, median run seconds, all run times) of `fn(*args)` (a jitted fn)."""
+    compile_s, run_s, runs, _ = time_compiled_output(fn, *args, repeats=repeats, warmup=warmup)
+    return compile_s, run_s, runs
+
+
+def time_compiled_output(fn, *args, repeats: int = 5, warmup: int = 1):
+    """`time_compiled`, and the output of the compiled program (from the warm-up run, or
+    one more run without warm-up), so a check of the results does not compile again."""
     t0 = time.perf_counter()
     compiled = fn.lower(*args).compile()
     compile_s = time.perf_counter() - t0
-    for _ in range(warmup):
-        jax.block_until_ready(compiled(*args))
+    output = None
+    for _ in range(max(warmup, 1)):
+        output = jax.block_until_ready(compiled(*args))
     runs = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         jax.block_until_ready(compiled(*args))
         runs.append(time.perf_counter() - t0)
-    return compile_s, statistics.median(runs), runs
+    return compile_s, statistics.median(runs), runs, output
+
+
+def time_host(fn, *args, repeats: int = 5, warmup: int = 1):
+    """(median seconds, all run times, last output) of a host (NumPy/SciPy) call `fn(*args)`."""
+    output = None
+    for _ in range(warmup):
+        output = fn(*args)
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        output = fn(*args)
+        runs.append(time.perf_counter() - t0)
+    return statistics.median(runs), runs, output
+
+
+def count_equations(jaxpr) -> int:
+    """Equations of a jaxpr, those of its sub-jaxprs (loops, conditionals, calls) included:
+    a measure of the traced program's size that does not depend on the machine's load."""
+    total = 0
+    for eqn in jaxpr.eqns:
+        total += 1
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, (tuple, list)) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if hasattr(inner, "eqns"):
+                    total += count_equations(inner)
+    return total
 
 
 def write(name: str, payload: dict) -> Path:

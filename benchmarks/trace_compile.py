@@ -17,24 +17,10 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from _common import machine, write  # noqa: E402
+from _common import count_equations, machine, write  # noqa: E402
 
 from gearjax.scene import _prepare, _simulate  # noqa: E402
 from gearjax.scene_file import default_scene  # noqa: E402
-
-
-def count_equations(jaxpr) -> int:
-    """Equations of a jaxpr, those of its sub-jaxprs (loops, conditionals, calls) included:
-    a measure of the traced program's size that does not depend on the machine's load."""
-    total = 0
-    for eqn in jaxpr.eqns:
-        total += 1
-        for param in eqn.params.values():
-            for sub in param if isinstance(param, (tuple, list)) else (param,):
-                inner = getattr(sub, "jaxpr", sub)
-                if hasattr(inner, "eqns"):
-                    total += count_equations(inner)
-    return total
 
 
 def main() -> None:
