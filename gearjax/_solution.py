@@ -52,8 +52,8 @@ class RESULTS(eqx.Enumeration):
         "(Scene(pitches=...)) or refine the grid (Accuracy.positions_per_pitch)."
     )
     first_contact_unconverged = (
-        "The first-contact root search (bisection of the gap along the pinion angle) did "
-        "not converge. Raise Accuracy.impact_max_steps."
+        "The first-contact root search (safeguarded Newton on the gap along the pinion "
+        "angle) did not converge. Raise Accuracy.impact_max_steps."
     )
     impact_contact_unconverged = (
         "The loaded contact solve of the pairs in mesh did not converge at the first-contact "

@@ -309,3 +309,67 @@ def test_bad_impact_input_is_rejected(seed_pair, kwargs, match):
 def test_bad_fit_range_is_rejected(fit):
     with pytest.raises(ValueError, match="impact_fit_range"):
         gj.Accuracy(impact_fit_range=fit)
+
+
+def test_first_contact_search_is_a_root_in_a_few_newton_steps(seed_pair):
+    """The safeguarded Newton search stops at a root of the gap H (|H| within the
+    tolerance) after a few evaluations, at the angle a tight bisection of the same H on the
+    same grid bracket finds, for a flank (surface) and a tip-edge first contact."""
+    from gearjax.impact import analysis
+
+    for y, torque, regime in ((PAPER, 400.0, "surface"), (PLAIN, 1000.0, "edge")):
+        s = scene(seed_pair, y, torque)
+        sim = gj.simulate(s)
+        imp = sim.impact
+        assert imp.regime_name == regime
+        assert 2 <= int(imp.search_steps) <= 6
+        pair = s.pair.resolve()
+        ctx = analysis._Context(pair, s.depth, jnp.asarray(s.operating.torque), s.contact_model, s.pairs)
+        found, column, lower, upper, _, _ = analysis._bracket(sim.tca, sim.ltca)
+        assert bool(found) and int(jnp.asarray(s.pairs)[column]) == int(imp.pair_index)
+
+        @jax.jit
+        def gap(phi1, column=column, ctx=ctx):
+            (te, lte, _), _ = analysis._evaluate(ctx, column, phi1)
+            return te - lte
+
+        root = float(imp.pinion_angle)
+        assert float(lower) < root < float(upper)
+        assert abs(float(gap(jnp.asarray(root)))) <= ACC.newton_atol
+        assert float(gap(lower)) < 0.0 <= float(gap(upper))
+        lo, hi = float(lower), float(upper)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if float(gap(jnp.asarray(mid))) < 0.0 else (lo, mid)
+        assert root == pytest.approx(hi, abs=1e-10)
+
+
+def test_first_contact_tangents_follow_the_root(seed_pair):
+    """The search's custom JVP (implicit function theorem, rates to second order) against
+    central differences of searches re-run at nearby torques, on a flank and a tip-edge
+    first contact: the root, the loaded TE there and both rates."""
+    from gearjax.impact import analysis
+
+    pair = seed_pair.resolve()
+    model = scene(seed_pair, PAPER, 400.0).contact_model
+
+    def search(torque_Nmm, depth, bracket):
+        ctx = analysis._Context(pair, depth, torque_Nmm, model, (-2, -1, 0, 1, 2))
+        r = analysis.first_contact(ctx, *bracket[1:], bracket[0])
+        return jnp.stack([r.pinion_angle, r.contact.lte, r.contact.te_slope, r.contact.lte_slope])
+
+    primal = jax.jit(search)
+    tangent = jax.jit(lambda t, depth, bracket: jax.jvp(lambda t: search(t, depth, bracket), (t,), (jnp.ones_like(t),)))
+    for y, torque in ((PAPER, 400.0), (PLAIN, 1000.0)):
+        s = scene(seed_pair, y, torque)
+        sim = gj.simulate(s)
+        bracket = analysis._bracket(sim.tca, sim.ltca)
+        t = jnp.asarray(s.operating.torque)
+        values, tangents = tangent(t, s.depth, bracket)
+        assert np.asarray(values) == pytest.approx(np.asarray(primal(t, s.depth, bracket)), rel=1e-12)
+        # truncation error ~1e-5 relative at h = 1e-3 T, ~1e-7 at 1e-4 T (the root is
+        # converged far below that)
+        h = 1e-4 * t
+        fd = (np.asarray(primal(t + h, s.depth, bracket)) - np.asarray(primal(t - h, s.depth, bracket))) / (2 * float(h))
+        assert np.all(np.abs(fd) > 0.0)
+        assert np.asarray(tangents) == pytest.approx(fd, rel=1e-6)

@@ -11,15 +11,34 @@ $$H(\varphi_1) = \max_j \Delta_{kj}(\varphi_1) - \mathrm{LTE}_{\neg k}(\varphi_1
 i.e. while its rigid gap (geometry, modifications, errors) exceeds the loaded approach of
 the others, and first touches at the root $\varphi_1^*$ of $H$. The cycle grid of the
 scene's TCA/LTCA brackets the first upward crossing (with pair $k$ unloaded before its
-first contact, the scene's LTE equals $\mathrm{LTE}_{\neg k}$ there), then optimistix's
-bisection finds $\varphi_1^*$ with TCA and LTCA evaluated at single positions. The first
-touching candidate gives the point M, its normal and the **regime**: `edge` when it is a
-tip edge, `surface` when it is a flank point. The same search serves every tooth family.
+first contact, the scene's LTE equals $\mathrm{LTE}_{\neg k}$ there). The first touching
+candidate gives the point M, its normal and the **regime**: `edge` when it is a tip edge,
+`surface` when it is a flank point. The same search serves every tooth family.
+
+**Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
+binding slice or candidate changes, or where the LTCA's active set does), so a
+safeguarded Newton iteration finds $\varphi_1^*$ in a handful of steps (Numerical
+Recipes' `rtsafe`). Each step runs TCA and LTCA at one pinion angle inside one
+forward-mode pass that also gives the rates $\Delta_k'$, $\mathrm{LTE}_{\neg k}'$ and so
+$H'$. The bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$, starts as
+the grid step and moves its end of the same sign to every evaluated point; the first point
+is the regula-falsi point of the grid values; the next is the Newton point
+$\varphi - H/H'$ when it lies inside the bracket and is at most half the previous step,
+else the bracket's midpoint (bisection), so the search never leaves the bracket and its
+steps at least halve. It has converged when $|H| \le$ atol and the Newton step or the
+bracket is below atol + rtol $|\varphi_1|$ (`Accuracy.newton_atol`, `newton_rtol`);
+`Accuracy.impact_max_steps` caps the evaluations, `ImpactResult.search_steps` counts
+them. The values at the last evaluated point, rates included, are the first contact's:
+the search is the only place the single-position TCA/LTCA is traced in a program that
+is not differentiated. The loop is a `lax.while_loop` with a result code, no callbacks.
 
 Gradients of $\varphi_1^*$ follow from the implicit function theorem,
-$\mathrm d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$ (bisection itself is not
-differentiated). Where $H_\varphi = 0$ (zero load on perfect flanks: tangential
-engagement) the derivative is set to zero.
+$\mathrm d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$, through a custom JVP
+(the iteration itself is not differentiated): differentiating evaluates the contact at
+the root once more, along the parameters' tangent and the root's together, so the rates
+(in the impact velocity) carry their own second-order change along $\varphi_1$. Where
+$H_\varphi = 0$ (zero load on perfect flanks: tangential engagement) the derivative is
+set to zero.
 
 **Regime switch.** As the load grows on a modified pair, the flank contact point moves
 toward the gear's tip edge and the edge candidate takes over exactly when the flank point
@@ -44,11 +63,10 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 
-from .._custom_types import Array, Float, Int, Scalar
+from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide
-from .._solution import ADJOINT, RESULTS, enum_name, enum_where, first_failure
+from .._solution import RESULTS, enum_name, enum_where, first_failure
 from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis, moment_arms
 from ..ltca.model import ContactModel
 from ..tca import ContactKind, TCAResult, tooth_contact_analysis
@@ -73,7 +91,7 @@ class ImpactResult(eqx.Module):
     Attributes:
         result: `RESULTS.successful`, or the first failure of the search:
             `first_contact_not_bracketed` (no first contact on the cycle grid),
-            `first_contact_unconverged` (the bisection), `impact_contact_unconverged`
+            `first_contact_unconverged` (the root search), `impact_contact_unconverged`
             (the loaded contact at the first-contact position) or `stiffness_fit_failed`
             (a solve of the local force-approach curve). The other fields are meaningful
             only where it is successful.
@@ -101,6 +119,8 @@ class ImpactResult(eqx.Module):
         force: peak impact force $F_s$ (N).
         approach: peak approach $\\delta_s$ (mm).
         kinetic_energy: $\\tfrac12m_{eq}v_n^2$ (N·mm).
+        search_steps: evaluations of TCA and LTCA at one pinion angle taken by the
+            first-contact search (at most `Accuracy.impact_max_steps`).
     """
 
     result: RESULTS
@@ -129,6 +149,7 @@ class ImpactResult(eqx.Module):
     force: Scalar
     approach: Scalar
     kinetic_energy: Scalar
+    search_steps: Int[Array, ""]
 
     @property
     def regime_name(self):
@@ -147,9 +168,31 @@ class _Context(eqx.Module):
     pairs: tuple[int, ...] = eqx.field(static=True)
 
 
-def _single(ctx: _Context, phi1, column):
+class _Contact(eqx.Module):
+    """The incoming pair $k$ at one pinion angle: its rigid offset $\\max_j\\Delta_{kj}$ (`te`),
+    the loaded TE of the other pairs (`lte`), the TCA at that angle, and the rates of both
+    offsets along $\\varphi_1$."""
+
+    te: Scalar
+    lte: Scalar
+    tca: TCAResult
+    te_slope: Scalar
+    lte_slope: Scalar
+
+    @property
+    def gap(self):
+        """$H = \\max_j\\Delta_{kj} - \\mathrm{LTE}_{\\neg k}$ (rad, gear 2)."""
+        return self.te - self.lte
+
+    @property
+    def gap_slope(self):
+        """$H' = \\mathrm dH/\\mathrm d\\varphi_1$ (-)."""
+        return self.te_slope - self.lte_slope
+
+
+def _evaluate(ctx: _Context, column, phi1):
     """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
-    incoming pair's first-touching slice."""
+    incoming pair's first-touching slice: `(te, lte, tca), (j, solved)`."""
     tca = tooth_contact_analysis(
         ctx.pair, ctx.depth, accuracy=ctx.model.accuracy, pairs=ctx.pairs, pinion_angles=phi1[None]
     )
@@ -157,47 +200,162 @@ def _single(ctx: _Context, phi1, column):
     ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
-    return (offsets[j], ltca.transmission_error[0]), (tca, j, ltca.converged[0])
+    return (offsets[j], ltca.transmission_error[0], tca), (j, ltca.converged[0])
 
 
-def _gap(phi1, args):
-    ctx, column = args
-    (te, lte), _ = _single(ctx, phi1, column)
-    return te - lte
+def _with_rates(ctx: _Context, column, phi1):
+    """`_evaluate` and, in the same forward-mode pass, the rates of both offsets along
+    $\\varphi_1$: `(contact, (j, solved))`."""
+    (te, lte, tca), (dte, dlte, _), aux = jax.jvp(
+        lambda p: _evaluate(ctx, column, p), (phi1,), (jnp.ones_like(phi1),), has_aux=True
+    )
+    return _Contact(te, lte, tca, dte, dlte), aux
 
 
-def first_contact(ctx: _Context, column, lower, upper):
-    """Bisection for $H(\\varphi_1) = 0$ on `[lower, upper]` (H(lower) < 0 <= H(upper)),
-    then the implicit-function correction that carries the gradients. Returns
-    `(phi1, converged)`."""
-    dtype = jnp.result_type(lower)
+class _Search(eqx.Module):
+    """Outcome of the first-contact search: the contact at its last point."""
+
+    pinion_angle: Scalar
+    contact: _Contact
+    slice_index: Int[Array, ""]
+    solved: Bool[Array, ""]
+    steps: Int[Array, ""]
+    converged: Bool[Array, ""]
+
+
+class _SearchState(eqx.Module):
+    """Carry of the search loop: the bracket, the next point and the last outcome."""
+
+    lower: Scalar
+    upper: Scalar
+    point: Scalar  # where the next evaluation goes
+    last_step: Scalar  # length of the previous step (the safeguard's reference)
+    search: _Search
+
+
+def _tolerances(ctx: _Context, dtype):
+    """`(atol, rtol, tiny)`: the search's tolerances (`Accuracy.newton_atol/rtol` floored
+    near machine precision) and the smallest slope $H'$ trusted for a Newton step."""
     eps = float(jnp.finfo(dtype).eps)
     acc = ctx.model.accuracy
-    atol = max(acc.newton_atol, 64 * eps)
-    rtol = max(acc.newton_rtol, 16 * eps)
-    solver = optx.Bisection(rtol=rtol, atol=atol, flip=False)
-    frozen = jax.tree_util.tree_map(
-        lambda x: jax.lax.stop_gradient(x) if eqx.is_array(x) else x, (ctx, lower, upper)
+    return max(acc.newton_atol, 64 * eps), max(acc.newton_rtol, 16 * eps), 1e3 * eps
+
+
+def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) -> _Search:
+    """Safeguarded Newton iteration for $H(\\varphi_1) = 0$ on `[lower, upper]`
+    ($H$(lower) < 0 <= $H$(upper); `gap_lower`, `gap_upper` are those values on the cycle
+    grid), with $H$ and $H'$ from one forward-mode evaluation per step.
+
+    Starts at the regula-falsi point of the grid values. Each step evaluates $H$ and $H'$ at
+    the current point, moves the bracket end of the same sign there, and takes the Newton
+    step when it stays inside the bracket and is at most half the previous step, else
+    bisects. Converged once $|H| \\le$ atol and either the Newton step or the bracket is
+    below atol + rtol$|\\varphi_1|$ (the tolerances of `Accuracy.newton_atol/rtol`, floored
+    near machine precision); at most `Accuracy.impact_max_steps` evaluations. No gradient
+    flows through the iteration (`first_contact` supplies it).
+    """
+    ctx, column, lower, upper, gap_lower, gap_upper = jax.lax.stop_gradient(
+        (ctx, column, lower, upper, gap_lower, gap_upper)
     )
-    args = (frozen[0], column)
-    sol = optx.root_find(
-        _gap,
-        solver,
-        0.5 * (frozen[1] + frozen[2]),
-        args=args,
-        options=dict(lower=frozen[1], upper=frozen[2]),
-        max_steps=acc.impact_max_steps,
-        throw=False,
-        adjoint=ADJOINT,
+    atol, rtol, tiny = _tolerances(ctx, lower.dtype)
+    # One trace of the evaluation serves the loop body and the shape of its carry.
+    evaluate = eqx.filter_closure_convert(lambda p: _with_rates(ctx, column, p), lower)
+    width = upper - lower
+    start = lower - safe_divide(gap_lower * width, gap_upper - gap_lower, 0.5 * width)
+    margin = width / 64
+    start = jnp.where(jnp.isfinite(start), jnp.clip(start, lower + margin, upper - margin), lower + 0.5 * width)
+    contact, (j, solved) = jax.tree_util.tree_map(
+        lambda s: jnp.zeros(s.shape, s.dtype) if isinstance(s, jax.ShapeDtypeStruct) else s, evaluate.out_struct
     )
-    return jax.lax.stop_gradient(sol.value), sol.result == optx.RESULTS.successful
+    zero = jnp.zeros((), jnp.int32)
+    initial = _SearchState(
+        lower, upper, start, width, _Search(start, contact, j, solved, zero, jnp.zeros((), bool))
+    )
+    max_steps = ctx.model.accuracy.impact_max_steps
+
+    def cond(state: _SearchState):
+        s = state.search
+        return (s.steps == 0) | (found & ~s.converged & (s.steps < max_steps))
+
+    def body(state: _SearchState):
+        x = state.point
+        contact, (j, solved) = evaluate(x)
+        h, dh = contact.gap, contact.gap_slope
+        below = h < 0
+        lower = jnp.where(below, x, state.lower)
+        upper = jnp.where(below, state.upper, x)
+        tol = atol + rtol * jnp.abs(x)
+        increasing = dh > tiny
+        newton = -safe_divide(h, jnp.where(increasing, dh, 0.0))
+        converged = (jnp.abs(h) <= atol) & ((upper - lower <= tol) | (increasing & (jnp.abs(newton) <= tol)))
+        candidate = x + newton
+        take_newton = (
+            increasing & (candidate > lower) & (candidate < upper) & (jnp.abs(newton) <= 0.5 * state.last_step)
+        )
+        point = jnp.where(take_newton, candidate, lower + 0.5 * (upper - lower))
+        search = _Search(x, contact, j, solved, state.search.steps + 1, converged)
+        return _SearchState(lower, upper, point, jnp.abs(point - x), search)
+
+    return jax.lax.while_loop(cond, body, initial).search
+
+
+@eqx.filter_custom_jvp
+def first_contact(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) -> _Search:
+    """First contact of pair `column` in `[lower, upper]` (see `_search`), with the
+    gradients of the implicit function theorem: returns a `_Search` whose pinion angle
+    $\\varphi_1^*$ and contact carry $\\mathrm d/\\mathrm d\\theta$ through the root.
+
+    Differentiating evaluates the contact once more at $\\varphi_1^*$: with
+    $\\dot H_\\theta$ the change of $H$ along the parameters' tangent at fixed angle,
+    $\\dot\\varphi_1^* = -\\dot H_\\theta / H'$ (zero where $H' = 0$: tangential engagement of
+    unloaded perfect flanks), and every output $Q$ (the rates included, so second
+    derivatives along $\\varphi_1$ enter) changes by $\\dot Q_\\theta + Q'\\dot\\varphi_1^*$, one
+    forward-mode pass along $(\\dot\\theta, \\dot\\varphi_1^*)$. The bracket does not
+    change the root, so its tangents are ignored. First order only.
+    """
+    return _search(ctx, column, lower, upper, gap_lower, gap_upper, found)
+
+
+@first_contact.def_jvp
+def _first_contact_jvp(primals, tangents):
+    ctx, column = primals[:2]
+    search = _search(*primals)
+    root = search.pinion_angle
+    diff, static = eqx.partition(ctx, eqx.is_inexact_array)
+    d_ctx = jax.tree_util.tree_map(
+        lambda x, t: None if x is None else (jnp.zeros_like(x) if t is None else t),
+        diff,
+        tangents[0],
+        is_leaf=lambda v: v is None,
+    )
+
+    def gap(d):
+        (te, lte, _), _ = _evaluate(eqx.combine(d, static), column, root)
+        return te - lte
+
+    _, gap_tangent = jax.jvp(gap, (diff,), (d_ctx,))
+    _, _, tiny = _tolerances(ctx, root.dtype)
+    slope = search.contact.gap_slope
+    d_root = -jnp.where(jnp.abs(slope) > tiny, safe_divide(gap_tangent, slope), 0.0)
+
+    def contact_at(d, p):
+        return _with_rates(eqx.combine(d, static), column, p)[0]
+
+    _, d_contact = jax.jvp(contact_at, (diff, root), (d_ctx, d_root))
+    d_contact = jax.tree_util.tree_map(
+        lambda t, x: t if eqx.is_inexact_array(x) else None, d_contact, search.contact
+    )
+    d_search = _Search(d_root, d_contact, None, None, None, None)
+    return search, d_search
 
 
 def _bracket(tca: TCAResult, ltca: LTCAResult):
-    """First upward crossing of $H$ along the tracked tooth's history on the cycle grid.
+    """First upward crossing of $H$ along the tracked tooth's history on the cycle grid:
+    `(found, column, lower, upper, gap_lower, gap_upper)`.
 
     Pair $k$ at pinion angle $\\varphi_1$ is pair 0 at $\\varphi_1 - kp$, so ordering the
-    grid by descending pair and ascending angle follows one tooth through the mesh.
+    grid by descending pair and ascending angle follows one tooth through the mesh. The
+    gap at `upper` is the scene's, with pair $k$ loaded: it only seeds the first step.
     """
     offsets = jnp.max(jnp.where(tca.valid, tca.slice_te, -jnp.inf), axis=-1)  # (pos, pair)
     h = offsets - ltca.transmission_error[:, None]
@@ -208,7 +366,7 @@ def _bracket(tca: TCAResult, ltca: LTCAResult):
     up = (line[1:] >= 0) & (line[:-1] < 0)
     i = jnp.argmax(up) + 1
     step = tca.pinion_angle[1] - tca.pinion_angle[0]
-    return jnp.any(up), columns[i], angles[i] - step, angles[i]
+    return jnp.any(up), columns[i], angles[i] - step, angles[i], line[i - 1], line[i]
 
 
 def impact_analysis(
@@ -231,52 +389,16 @@ def impact_analysis(
         torque: pinion torque (N·mm).
         speed: pinion speed $\\omega_1$ (rad/s).
         model: the loaded-contact model, as for the LTCA (`ContactModel`; its accuracy
-            also sets the bisection and the stiffness fit).
+            also sets the first-contact search and the stiffness fit).
         pairs: the tooth-pair window of `tca` (static).
         inertia: $(J_1, J_2)$ of the rotating assemblies (t·mm²); default the solid discs
             $\\pi\\rho b(r_b^4 - r_h^4)/2$.
     """
     pair = pair.resolve()
     ctx = _Context(pair, depth, jnp.asarray(torque, ltca.rotation.dtype), model, tuple(pairs))
-    found, column, lower, upper = _bracket(tca, ltca)
-    root, bisected = first_contact(ctx, column, lower, upper)
-    return _impact_at(ctx, column, root, speed, inertia, found, bisected)
-
-
-def _follow_root(ctx: _Context, column, root):
-    """Everything at the first contact `root`, continued so that it carries the gradients
-    of $\\varphi_1^*$: returns `(phi1, (te, lte, tca, dte, dlte), j, solved)`.
-
-    One forward-mode evaluation at the root gives the values, their rates along
-    $\\varphi_1$, and (implicit function theorem) the gradients of $\\varphi_1^*$:
-    $\\mathrm d\\varphi_1^*/\\mathrm d\\theta = -H_\\theta/H_\\varphi$. Every output $Q$ is
-    continued as $Q + Q'\\,\\text{shift}$, where `shift` is zero in value and carries those
-    gradients. Second order as well: the impact velocity contains the rates, and their own
-    change along $\\varphi_1$ enters its gradient through $\\varphi_1^*$.
-    """
-
-    def evaluate(p):
-        (te, lte), (tca, j, solved) = _single(ctx, p, column)
-        return (te, lte, tca), (j, solved)
-
-    def with_rates(p):
-        (te, lte, tca), (dte, dlte, _), aux = jax.jvp(evaluate, (p,), (jnp.ones_like(p),), has_aux=True)
-        return (te, lte, tca, dte, dlte), aux
-
-    values, tangents, (j, solved) = jax.jvp(with_rates, (root,), (jnp.ones_like(root),), has_aux=True)
-    te, lte, _, dte, dlte = values
-    h = te - lte
-    slope = jax.lax.stop_gradient(dte - dlte)
-    eps = float(jnp.finfo(root.dtype).eps)
-    steep = jnp.abs(slope) > 1e3 * eps
-    shift = -jnp.where(steep, safe_divide(h - jax.lax.stop_gradient(h), slope), 0.0)
-
-    def follow(x, dx):
-        if eqx.is_inexact_array(x):
-            return x + jax.lax.stop_gradient(dx) * shift
-        return x
-
-    return root + shift, jax.tree_util.tree_map(follow, values, tangents), j, solved
+    found, column, lower, upper, gap_lower, gap_upper = _bracket(tca, ltca)
+    search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
+    return _impact_at(ctx, column, search, speed, inertia, found)
 
 
 def _local_fit(ctx: _Context, tca: TCAResult, column, p_arm) -> LocalStiffness:
@@ -302,9 +424,11 @@ def _local_fit(ctx: _Context, tca: TCAResult, column, p_arm) -> LocalStiffness:
     return local_stiffness(matrix, nonlinear, points.exponent, separation, valid, reference, acc)
 
 
-def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected) -> ImpactResult:
+def _impact_at(ctx: _Context, column, search: _Search, speed, inertia, found) -> ImpactResult:
     pair = ctx.pair
-    phi1, (te, lte, tca, dte, dlte), j, solved = _follow_root(ctx, column, root)
+    phi1, j, solved = search.pinion_angle, search.slice_index, search.solved
+    contact = search.contact
+    te, lte, tca, dte, dlte = contact.te, contact.lte, contact.tca, contact.te_slope, contact.lte_slope
     x1 = tca.pinion_point[0, column, j]
     n = tca.normal[0, column, j]
     kind = jax.tree_util.tree_map(lambda v: v[0, column, j], tca.kind)
@@ -327,7 +451,7 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected) -> 
     v = jnp.maximum(velocity, 0.0)
     result = first_failure(
         (~found, RESULTS.first_contact_not_bracketed),
-        (~bisected, RESULTS.first_contact_unconverged),
+        (~search.converged, RESULTS.first_contact_unconverged),
         (~solved, RESULTS.impact_contact_unconverged),
         (fit.result != RESULTS.successful, fit.result),
     )
@@ -358,4 +482,5 @@ def _impact_at(ctx: _Context, column, root, speed, inertia, found, bisected) -> 
         force=force,
         approach=approach,
         kinetic_energy=0.5 * mass * v * v,
+        search_steps=search.steps,
     )
