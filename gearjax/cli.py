@@ -2,6 +2,7 @@
 
     gearjax run [SCENE.toml] [--json] [--no-cache]
     gearjax reproduce curvilinear|dca [--json] [--cross-check] [--no-cache]
+    gearjax optimize [SCENE.toml] [--method ga|gradient] [--out DIR] [--resume] [--json] [--quiet]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
@@ -107,6 +108,12 @@ def _reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _optimize(args: argparse.Namespace) -> int:
+    from .optimize.command import run_command
+
+    return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="gearjax", description="Differentiable gear contact engine.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -120,7 +127,14 @@ def main(argv: list[str] | None = None) -> int:
         "--cross-check", action="store_true",
         help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
     )
-    for command in (run, rep):
+    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section)")
+    opt.add_argument("scene", nargs="?", help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
+    opt.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
+    opt.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")
+    opt.add_argument("--resume", action="store_true", help="continue the run in --out")
+    opt.add_argument("--json", action="store_true", help="print one JSON object")
+    opt.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
+    for command in (run, rep, opt):
         command.add_argument(
             "--no-cache", action="store_true",
             help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
@@ -130,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     with _caches(args):
         if args.command == "run":
             return _run(args)
+        if args.command == "optimize":
+            return _optimize(args)
         return _reproduce(args)
 
 

@@ -61,7 +61,8 @@ accuracy = "default"
 effects = ["impact"]         # LTCA runs whenever a torque is given
 """
 
-_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis")
+#: `[optimize]` is read by `gearjax.optimize.settings` (the `gearjax optimize` command).
+_SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis", "optimize")
 _PAIR_KEYS = {
     "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
     "face_width", "profile_shift", "center_distance", "addendum_coefficient",

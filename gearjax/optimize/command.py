@@ -1,0 +1,126 @@
+"""`gearjax optimize`: read a scene file's `[optimize]` section, run, report, write the
+best design as a ready-to-run scene file."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .run import genetic, gradient_descent
+from .settings import OptimizeSettings, SettingsError
+from .space import design_dict
+
+
+def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool) -> int:
+    from ..scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene
+
+    try:
+        text = DEFAULT_SCENE_TOML if scene_path is None else _read(scene_path)
+        scene, data = parse_scene(text, "default scene" if scene_path is None else scene_path)
+        settings = OptimizeSettings.from_dict(data.get("optimize", {}))
+        if method is not None:
+            settings = OptimizeSettings.from_dict({**data.get("optimize", {}), "method": method})
+        objective, space = settings.build(scene)
+    except (SceneFileError, SettingsError) as err:
+        print(f"gearjax: error: {err}", file=sys.stderr)
+        return 2
+    progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
+    try:
+        if settings.method == "ga":
+            result = genetic(objective, space, config=settings.ga_config(), generations=settings.generations,
+                             seed=settings.seed, run_dir=out, resume=resume, progress=progress)
+        else:
+            result = gradient_descent(objective, space, config=settings.gradient_config(), seed=settings.seed,
+                                      run_dir=out, resume=resume, progress=progress)
+    except ValueError as err:  # e.g. a run directory that holds another run
+        print(f"gearjax: error: {err}", file=sys.stderr)
+        return 2
+    best_scene = Path(out) / "best_scene.toml"
+    best_scene.write_text(best_scene_toml(data, result.best_design))
+    unit = "N" if objective.quantity == "force" else "mm/s"
+    report = {
+        "optimize": {
+            "method": result.method,
+            "objective": objective.quantity,
+            "objective_unit": unit,
+            "aggregate": objective.aggregate,
+            "loads_Nm": (np.asarray(objective.torques) / 1000.0).tolist(),
+            "error_samples": objective.samples,
+            "accuracy": settings.accuracy,
+            "initial_objective_N": result.initial_objective,
+            "best_objective_N": result.best_objective,
+            "initial_modification": design_dict(result.initial_design),
+            "best_modification": design_dict(result.best_design),
+            "evaluations": result.evaluations,
+            "gradient_evaluations": result.gradient_evaluations,
+            "steps": result.steps,
+            "wall_time_s": result.wall_time_s,
+            "history": result.history,
+            "converged": result.converged,
+            "run_dir": result.run_dir,
+            "best_scene": str(best_scene),
+        }
+    }
+    if as_json:
+        print(json.dumps(report, indent=2))
+    else:
+        print(summary(report["optimize"]))
+    return 0
+
+
+def _read(path: str) -> str:
+    from ..scene_file import SceneFileError
+
+    try:
+        return Path(path).read_text()
+    except OSError as err:
+        raise SceneFileError(f"{path}: cannot read the scene file ({err.strerror})") from None
+
+
+def summary(o: dict) -> str:
+    unit = o["objective_unit"]
+    lines = [
+        f"gearjax optimize: {o['method']} on the mesh-in impact {o['objective']} "
+        f"({o['aggregate']} over {', '.join(f'{t:g}' for t in o['loads_Nm'])} N·m"
+        + (f", {o['error_samples']} error samples" if o["error_samples"] > 1 else "")
+        + f"; accuracy '{o['accuracy']}')",
+        f"  initial design     {o['initial_objective_N']:.6g} {unit}",
+        f"  best design        {o['best_objective_N']:.6g} {unit}  "
+        f"({o['steps']} steps, {o['evaluations']} evaluations, {o['wall_time_s']:.1f} s, "
+        f"{'converged' if o['converged'] else 'not converged'})",
+        "  best modification  " + ", ".join(f"{k} = {v:.4g}" for k, v in o["best_modification"].items()),
+        f"  run directory      {o['run_dir']}  (best design: {o['best_scene']})",
+    ]
+    return "\n".join(lines)
+
+
+def best_scene_toml(data: dict, design) -> str:
+    """The scene file `data` with `[modification]` set to `design` (mm)."""
+    data = {k: dict(v) if isinstance(v, dict) else v for k, v in data.items()}
+    data["modification"] = {key: round(value, 6) for key, value in design_dict(design).items()}
+    header = "# The best design of a `gearjax optimize` run: the input scene with its [modification] replaced.\n"
+    return header + "\n".join(_toml_table(name, table) for name, table in data.items() if isinstance(table, dict))
+
+
+def _toml_table(name: str, table: dict) -> str:
+    lines = [f"[{name}]"]
+    for key, value in table.items():
+        lines.append(f"{key} = {_toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} to TOML")
+
+

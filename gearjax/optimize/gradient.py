@@ -1,0 +1,132 @@
+r"""Projected gradient descent (Adam) from several starts at once, in unit-cube coordinates.
+
+Each start $x_k \in [0, 1]^6$ takes Adam steps (optax) on $J(y(x))$ and is projected back
+onto the box after each step (`optax.projections.projection_box`, i.e. clipping), so
+every evaluated design lies within the bounds. The starts are a Latin hypercube sample
+(one stratum per start and parameter), and all starts are evaluated together: one
+compiled call of `Objective`'s value and gradient per iteration.
+
+**Kinks.** $J$ is piecewise smooth: it kinks where the mesh-in regime switches (surface
+$\leftrightarrow$ edge contact) and where the binding candidate or the LTCA's active set
+changes. The gradient there is the one-sided gradient of the branch that binds; Adam's
+normalised steps do not blow up at such a kink, and because each start keeps its best
+point, a step that crosses into a worse branch costs an evaluation, not the progress.
+A design whose evaluation fails (objective $+\infty$, non-finite gradient) is not
+stepped from: the start moves halfway back to its best point.
+
+**Stopping.** A start stops when its best value has not improved by more than `ftol`
+(relative) for `patience` iterations, or when its projected step is shorter than `xtol`
+(unit coordinates); the run stops when every start has stopped (`converged`), or after
+`iterations`.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optax
+
+from .._custom_types import Array, Bool, Float, Int
+from .._validate import check_int, check_range
+
+
+class GradientConfig(eqx.Module):
+    """Static settings of the multi-start projected Adam.
+
+    Attributes:
+        starts: number of starts run together (>= 1).
+        iterations: cap on the iterations (>= 1).
+        learning_rate: Adam's step size in unit-cube coordinates (> 0).
+        ftol: relative improvement of a start's best value below which it counts as stalled.
+        patience: stalled iterations after which a start stops (>= 1).
+        xtol: projected step length (unit coordinates) below which a start stops.
+    """
+
+    starts: int = eqx.field(static=True, default=8)
+    iterations: int = eqx.field(static=True, default=40)
+    learning_rate: float = eqx.field(static=True, default=0.05)
+    ftol: float = eqx.field(static=True, default=1e-3)
+    patience: int = eqx.field(static=True, default=8)
+    xtol: float = eqx.field(static=True, default=1e-4)
+
+    def __check_init__(self):
+        check_int("starts", self.starts, 1)
+        check_int("iterations", self.iterations, 1)
+        check_range("learning_rate", self.learning_rate, 0.0, 1.0, low_inclusive=False)
+        check_range("ftol", self.ftol, 0.0, 1.0)
+        check_int("patience", self.patience, 1)
+        check_range("xtol", self.xtol, 0.0, 1.0)
+
+    def optimizer(self) -> optax.GradientTransformation:
+        return optax.adam(self.learning_rate)
+
+
+class GradientState(eqx.Module):
+    """State of a multi-start run (a pytree; saved and restored by the run directory).
+
+    Attributes:
+        iteration: iterations done.
+        position: current point of each start (unit coordinates), shape (K, d).
+        opt_state: Adam's state.
+        best: best point of each start, and `best_value` its objective.
+        stalled: iterations since each start last improved by more than `ftol`.
+        active: the start has not stopped.
+    """
+
+    iteration: Int[Array, ""]
+    position: Float[Array, "K d"]
+    opt_state: optax.OptState
+    best: Float[Array, "K d"]
+    best_value: Float[Array, " K"]
+    stalled: Int[Array, " K"]
+    active: Bool[Array, " K"]
+
+
+def latin_hypercube(key: Array, count: int, dimension: int) -> Float[Array, "count dimension"]:
+    """`count` points in $[0, 1]^d$, one in each of `count` equal strata per coordinate
+    (McKay, Beckman & Conover 1979)."""
+    k_perm, k_jitter = jax.random.split(key)
+    perms = jax.vmap(lambda k: jax.random.permutation(k, count))(jax.random.split(k_perm, dimension)).T
+    return (perms + jax.random.uniform(k_jitter, (count, dimension))) / count
+
+
+def gradient_init(key: Array, config: GradientConfig, dimension: int, initial: Array | None = None) -> GradientState:
+    """Starts from a Latin hypercube sample; its first rows replaced by `initial` (unit
+    coordinates, shape (m, d)) when given."""
+    position = latin_hypercube(key, config.starts, dimension)
+    if initial is not None:
+        initial = jnp.clip(jnp.atleast_2d(jnp.asarray(initial, position.dtype)), 0.0, 1.0)
+        if initial.shape[0] > config.starts or initial.shape[1] != dimension:
+            raise ValueError(f"initial designs must have shape (m <= {config.starts}, {dimension}); got {initial.shape}")
+        position = position.at[: initial.shape[0]].set(initial)
+    k = config.starts
+    return GradientState(
+        jnp.zeros((), jnp.int32),
+        position,
+        config.optimizer().init(position),
+        position,
+        jnp.full((k,), jnp.inf, position.dtype),
+        jnp.zeros((k,), jnp.int32),
+        jnp.ones((k,), bool),
+    )
+
+
+def gradient_step(state: GradientState, value: Float[Array, " K"], grad: Float[Array, "K d"], config: GradientConfig) -> GradientState:
+    """Take the objective and its gradient (unit coordinates) at `state.position` and move
+    every active start: bookkeeping of the best point, an Adam step projected onto the box,
+    and the stopping tests."""
+    ok = jnp.isfinite(value) & jnp.all(jnp.isfinite(grad), axis=-1)
+    improved = ok & (value < state.best_value)
+    significant = ok & (value < state.best_value - config.ftol * jnp.abs(state.best_value))
+    best = jnp.where(improved[:, None], state.position, state.best)
+    best_value = jnp.where(improved, value, state.best_value)
+    stalled = jnp.where(significant | ~jnp.isfinite(state.best_value), 0, state.stalled + 1)
+    updates, opt_state = config.optimizer().update(jnp.where(ok[:, None], grad, 0.0), state.opt_state, state.position)
+    stepped = optax.projections.projection_box(optax.apply_updates(state.position, updates), 0.0, 1.0)
+    retreat = 0.5 * (state.position + best)
+    moved = jnp.where(ok[:, None], stepped, retreat)
+    step = jnp.linalg.norm(moved - state.position, axis=-1)
+    active = state.active & (stalled < config.patience) & ~(ok & (step < config.xtol))
+    position = jnp.where(state.active[:, None], moved, state.position)
+    return GradientState(state.iteration + 1, position, opt_state, best, best_value, stalled, active)

@@ -1,0 +1,296 @@
+r"""The optimisation objective: a pure function of the design vector.
+
+For a design $y$ (mm, `gearjax.optimize.space`), loads $T_l$ with weights $w_l$ and
+sampled mesh errors $e_s$ ($s = 1 \dots S$), the objective is
+
+$$J(y) = \mathop{A}_{l}\Big[\frac1S\sum_s q(y, T_l, e_s)\Big] + \sum_k \mu_k
+         \Big(\frac{p_k(y)}{p_k^\text{lim}} - 1\Big)_+^2 ,$$
+
+where $q$ is the mesh-in impact force $F_s$ (N, energy method, `gearjax.impact`) or the
+normal impact velocity $|v_n|$ (mm/s), the aggregate $A$ is the weighted mean
+$\sum_l w_l(\cdot)/\sum_l w_l$ or the maximum over the loads, and the optional penalties
+$p_k$ are the largest Hertz pressure (MPa) and the loaded TE peak-to-peak along the line
+of action (mm) over the loads and samples, with weights $\mu_k$ in the objective's unit.
+
+For each design and error sample the unloaded TCA runs once (it does not depend on the
+load); the LTCA and the first-contact search run per load (`vmap` over the loads), exactly
+the stages of `gearjax.simulate` for the same scene, so $q$ equals
+`simulate(scene).impact.force` at the same load and design. A design whose loaded contact
+or first-contact search fails (`ImpactResult.result` not successful) scores $+\infty$ and
+is counted in `Evaluation.failed`.
+
+A batch of designs is evaluated by `Objective.batch` in one compiled call. On a CPU the
+designs run one after another inside it (`lax.map`, `batch_size` 1 by default): the
+solvers' `while` loops under `vmap` run to the slowest member, which costs more than the
+batching saves; on an accelerator set a larger `batch_size`.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._custom_types import Array, ArrayLike, Float, Scalar
+from .._solution import RESULTS
+from .._validate import check_choice, check_int, check_range
+from ..geometry.errors import MeshErrors
+from ..impact import ImpactRegime, impact_analysis
+from ..ltca import loaded_contact_analysis
+from ..scene import Scene, _prepare
+from ..tca import tooth_contact_analysis
+from .space import DesignSpace, modification_from_design
+
+QUANTITIES = ("force", "velocity")
+AGGREGATES = ("mean", "max")
+
+
+class Penalty(eqx.Module):
+    """An exterior penalty $\\mu\\,(p/p^\\text{lim} - 1)_+^2$ on a result quantity.
+
+    Attributes:
+        limit: $p^\\text{lim}$ (MPa for the Hertz pressure, mm for the loaded TE peak-to-peak).
+        weight: $\\mu$, in the objective's unit (N or mm/s).
+    """
+
+    limit: float = eqx.field(static=True)
+    weight: float = eqx.field(static=True)
+
+    def __check_init__(self):
+        check_range("penalty limit", self.limit, 0.0, None, low_inclusive=False)
+        check_range("penalty weight", self.weight, 0.0, None)
+
+    def __call__(self, value: Scalar) -> Scalar:
+        return self.weight * jnp.square(jnp.maximum(value / self.limit - 1.0, 0.0))
+
+
+class Evaluation(eqx.Module):
+    """One design's results over the loads (axis 0) and error samples (axis 1).
+
+    Attributes:
+        objective: $J(y)$ ($+\\infty$ when a stage failed).
+        quantity: $q$ per load and sample (N or mm/s).
+        force: impact force $F_s$ (N).
+        velocity: normal impact velocity $v_n$ (mm/s).
+        edge: the first contact is a tip edge (`ImpactRegime.edge`).
+        pressure: largest Hertz pressure of the cycle (MPa).
+        lte_peak_to_peak: loaded TE peak-to-peak along the line of action (mm).
+        failed: number of (load, sample) entries whose LTCA or impact stage failed.
+    """
+
+    objective: Scalar
+    quantity: Float[Array, "load sample"]
+    force: Float[Array, "load sample"]
+    velocity: Float[Array, "load sample"]
+    edge: Array
+    pressure: Float[Array, "load sample"]
+    lte_peak_to_peak: Float[Array, "load sample"]
+    failed: Array
+
+
+class Objective(eqx.Module):
+    """The objective $J(y)$ of a scene over a load spectrum and error samples.
+
+    Build it with `Objective.create`; call it on a design vector (mm, shape (6,)) for the
+    scalar $J$, `evaluate` for every load's and sample's results, `batch` for a batch of
+    designs in one compiled call. All three are pure and `jit`/`vmap`/`grad`-able.
+
+    Attributes:
+        scene: the template scene (its modification is replaced by the design, its torque
+            by each load, its errors by each sample).
+        torques: the loads $T_l$ (N·mm), shape (L,).
+        weights: $w_l$, shape (L,), summing to 1.
+        errors: the error samples $e_s$ as a batched `MeshErrors` (leading axis S).
+        quantity: "force" ($F_s$, N) or "velocity" ($|v_n|$, mm/s) (static).
+        aggregate: "mean" or "max" over the loads (static).
+        pressure_penalty, lte_penalty: optional `Penalty` on the largest Hertz pressure
+            (MPa) and the loaded TE peak-to-peak (mm).
+        batch_size: designs evaluated together inside `batch` (static; see the module).
+    """
+
+    scene: Scene
+    torques: Float[Array, " load"]
+    weights: Float[Array, " load"]
+    errors: MeshErrors
+    quantity: str = eqx.field(static=True)
+    aggregate: str = eqx.field(static=True)
+    pressure_penalty: Penalty | None = None
+    lte_penalty: Penalty | None = None
+    batch_size: int = eqx.field(static=True, default=1)
+
+    @classmethod
+    def create(
+        cls,
+        scene: Scene,
+        *,
+        torques: ArrayLike | None = None,
+        torques_Nm: ArrayLike | None = None,
+        weights: ArrayLike | None = None,
+        quantity: str = "force",
+        aggregate: str = "mean",
+        errors: MeshErrors | None = None,
+        pressure_penalty: Penalty | None = None,
+        lte_penalty: Penalty | None = None,
+        batch_size: int = 1,
+    ) -> "Objective":
+        """Check the inputs and build the objective.
+
+        Args:
+            scene: a scene with a torque and `"impact"` in its effects (an involute pair).
+            torques / torques_Nm: the load spectrum in N·mm or N·m (give at most one; default
+                the scene's own torque): a non-empty list of finite torques > 0.
+            weights: one weight >= 0 per load, with a positive sum (default equal).
+            quantity: "force" or "velocity".
+            aggregate: "mean" (weighted) or "max" over the loads.
+            errors: error samples as a `MeshErrors` with a leading sample axis (see
+                `sample_errors`), or None for the scene's own errors (one sample).
+            pressure_penalty, lte_penalty: optional penalties.
+            batch_size: designs evaluated together in `batch`, >= 1.
+        """
+        if scene.operating.torque is None or "impact" not in scene.effects:
+            raise ValueError(
+                "the optimisation needs a scene with a torque and effects including 'impact' "
+                "(OperatingPoint(torque_Nm=...), effects=('impact',))"
+            )
+        if scene.modification is None:
+            raise ValueError("the scene needs a pinion modification to optimise (modification=FlankModification(...))")
+        check_choice("quantity (objective)", quantity, QUANTITIES)
+        check_choice("aggregate", aggregate, AGGREGATES)
+        check_int("batch_size", batch_size, 1)
+        if torques is not None and torques_Nm is not None:
+            raise ValueError("give the loads once: torques (N·mm) or torques_Nm (N·m)")
+        if torques is None and torques_Nm is None:
+            torques, name, unit, factor = [float(scene.operating.torque)], "torques", "N·mm", 1.0
+        elif torques is not None:
+            name, unit, factor = "torques", "N·mm", 1.0
+        else:
+            torques, name, unit, factor = torques_Nm, "torques_Nm", "N·m", 1000.0
+        values = np.asarray(torques, dtype=float)
+        if values.ndim != 1 or values.size == 0:
+            raise ValueError(f"{name} must be a non-empty list of pinion torques ({unit}); got {torques!r}")
+        check_range(name, values, 0.0, 1e12 / factor, low_inclusive=False, unit=unit)
+        values = values * factor
+        if weights is None:
+            w = np.full(values.size, 1.0 / values.size)
+        else:
+            w = np.asarray(weights, dtype=float)
+            if w.shape != values.shape:
+                raise ValueError(f"load weights must hold one weight per load ({values.size}); got {list(np.atleast_1d(w))}")
+            check_range("load weights", w, 0.0, None)
+            if not w.sum() > 0.0:
+                raise ValueError(f"load weights must sum to a positive number; got {list(w)}")
+            w = w / w.sum()
+        if errors is None:
+            base = scene.errors if scene.errors is not None else MeshErrors()
+            errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], base)
+        elif not isinstance(errors, MeshErrors) or jnp.ndim(errors.misalignment) != 1:
+            raise ValueError("errors must be a MeshErrors with one leading sample axis (see sample_errors)")
+        if scene.errors is None:
+            scene = Scene(
+                scene.pair, scene.modification, gear_modification=scene.gear_modification,
+                errors=MeshErrors(), operating=scene.operating, material=scene.material,
+                compliance=scene.compliance, hub_radius=scene.hub_radius, inertia=scene.inertia,
+                effects=scene.effects, accuracy=scene.accuracy, pairs=scene.pairs,
+                pitches=scene.pitches, extended_contact=scene.extended_contact,
+            )
+        scene = _prepare(scene)
+        dtype = jnp.float32 if scene.accuracy.dtype == "float32" else jnp.float64
+        errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), errors)
+        return cls(scene, jnp.asarray(values, dtype), jnp.asarray(w, dtype), errors, quantity, aggregate,
+                   pressure_penalty, lte_penalty, batch_size)
+
+    @property
+    def samples(self) -> int:
+        """Number of error samples $S$."""
+        return int(jnp.shape(self.errors.misalignment)[0])
+
+    def scene_for(self, design: ArrayLike, torque: ArrayLike | None = None, errors: MeshErrors | None = None) -> Scene:
+        """The template scene with the design's modification (and a load and error sample)."""
+        scene = eqx.tree_at(lambda s: s.modification, self.scene, modification_from_design(design))
+        if torque is not None:
+            scene = eqx.tree_at(lambda s: s.operating.torque, scene, jnp.asarray(torque, self.torques.dtype))
+        if errors is not None:
+            scene = eqx.tree_at(lambda s: s.errors, scene, errors)
+        return scene
+
+    def evaluate(self, design: ArrayLike) -> Evaluation:
+        """Results of one design (mm, shape (6,)) at every load and error sample."""
+
+        def per_sample(errors):
+            scene = self.scene_for(design, errors=errors)
+            pair = scene.pair.resolve()
+            model = scene.contact_model
+            tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+
+            def per_load(torque):
+                ltca = loaded_contact_analysis(pair, tca, torque, model)
+                impact = impact_analysis(
+                    pair, scene.depth, tca, ltca, torque=torque, speed=scene.operating.speed,
+                    model=model, pairs=scene.pairs, inertia=scene.inertia,
+                )
+                ok = (impact.result == RESULTS.successful) & (ltca.result == RESULTS.successful)
+                return (
+                    impact.force,
+                    impact.velocity,
+                    impact.regime == ImpactRegime.edge,
+                    jnp.max(ltca.pressure),
+                    ltca.lte_peak_to_peak_line,
+                    ok,
+                )
+
+            return jax.vmap(per_load)(self.torques)
+
+        out = jax.vmap(per_sample, out_axes=1)(self.errors)
+        force, velocity, edge, pressure, lte, ok = out
+        quantity = force if self.quantity == "force" else jnp.abs(velocity)
+        per_load = jnp.mean(quantity, axis=1)
+        value = jnp.sum(self.weights * per_load) if self.aggregate == "mean" else jnp.max(per_load)
+        if self.pressure_penalty is not None:
+            value = value + self.pressure_penalty(jnp.max(pressure))
+        if self.lte_penalty is not None:
+            value = value + self.lte_penalty(jnp.max(lte))
+        failed = jnp.sum(~ok)
+        value = jnp.where(failed == 0, value, jnp.inf)
+        return Evaluation(value, quantity, force, velocity, edge, pressure, lte, failed)
+
+    def __call__(self, design: ArrayLike) -> Scalar:
+        """$J(y)$ for one design (mm, shape (6,))."""
+        return self.evaluate(design).objective
+
+    def batch(self, designs: ArrayLike) -> Evaluation:
+        """`evaluate` for designs of shape (P, 6), in one program (leading axis P)."""
+        designs = jnp.asarray(designs, self.torques.dtype)
+        return jax.lax.map(self.evaluate, designs, batch_size=self.batch_size)
+
+
+def sample_errors(
+    count: int,
+    *,
+    misalignment: float = 0.0,
+    base_pitch_deviation: float = 0.0,
+    pitch_deviation: float = 0.0,
+    seed: int = 0,
+) -> MeshErrors:
+    """`count` mesh-error samples drawn uniformly within symmetric tolerances (mm):
+    $f \\sim U(-t, t)$ for each tolerance $t$ (0 keeps that error at zero). A fixed `seed`
+    makes the objective deterministic."""
+    check_int("error samples", count, 1)
+    for name, value in (("misalignment", misalignment), ("base_pitch_deviation", base_pitch_deviation),
+                        ("pitch_deviation", pitch_deviation)):
+        check_range(f"{name} tolerance", value, 0.0, 1.0, unit="mm")
+    keys = jax.random.split(jax.random.PRNGKey(seed), 3)
+    draw = lambda key, t: t * jax.random.uniform(key, (count,), minval=-1.0, maxval=1.0)  # noqa: E731
+    return MeshErrors(
+        base_pitch_deviation=draw(keys[1], base_pitch_deviation),
+        pitch_deviation=draw(keys[2], pitch_deviation),
+        misalignment=draw(keys[0], misalignment),
+    )
+
+
+def design_of(scene: Scene) -> Float[Array, "6"]:
+    """The scene's pinion modification as a design vector (mm)."""
+    return scene.modification.as_vector()
+
+
+

@@ -1,0 +1,387 @@
+"""Optimisation runs: one compiled call per generation/iteration, a run directory that
+loses nothing, exact resumption, progress display.
+
+A run directory holds
+
+* `run.json`: what the run is (method, settings, bounds, objective, seed), written once;
+  a resumed run must match it;
+* `history.jsonl`: one line per generation/iteration, appended and flushed to disk
+  (`fsync`) as soon as it is done: step, the evaluated designs (mm) and their objective
+  values, the best value and design so far, cumulative evaluations, elapsed time and the
+  random state;
+* `state.npz`: the full optimiser state after the last finished step (random key,
+  population and fitness, or Adam's state), replaced atomically (`os.replace`).
+
+Resuming loads `state.npz`, drops history lines past its step (a step whose state was not
+yet saved), and continues. The state holds everything the next step depends on and every
+step is one deterministic compiled program, so a resumed run ends with exactly the
+designs, values and history of an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._validate import check_int
+from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
+from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
+from .objective import Objective
+from .space import DesignSpace
+
+METHODS = ("ga", "gradient")
+
+
+@dataclasses.dataclass(frozen=True)
+class OptimizationResult:
+    """Outcome of `genetic` or `gradient_descent` (host values, engine units).
+
+    Attributes:
+        method: "ga" or "gradient".
+        best_design: $(y_1, \\dots, y_6)$ (mm) of the best design found.
+        best_objective: its objective value (N or mm/s).
+        initial_objective: the objective of the scene's own modification.
+        initial_design: that modification (mm).
+        history: best value after each generation/iteration.
+        evaluations: objective evaluations, counted per design and load (and error sample).
+        gradient_evaluations: of those, evaluations that also computed the gradient.
+        steps: generations or iterations run.
+        wall_time_s: wall time of the whole run (s), compilation included; a resumed run
+            adds the time of the runs before.
+        converged: gradient: every start stopped by its criterion before the cap; GA: the
+            best value did not change over the last quarter of the generations.
+        run_dir: the run directory, or None.
+    """
+
+    method: str
+    best_design: np.ndarray
+    best_objective: float
+    initial_objective: float
+    initial_design: np.ndarray
+    history: list[float]
+    evaluations: int
+    gradient_evaluations: int
+    steps: int
+    wall_time_s: float
+    converged: bool
+    run_dir: str | None
+
+
+# ---------------------------------------------------------------------------- compiled steps
+# The objective's batch (values, or values and gradients) is one compiled program shared by
+# every caller with the same objective structure and batch shape (the GA, the gradient
+# descent, `sensitivities`, the tests); the optimisers' own steps are small programs of
+# their own, so changing a GA setting does not recompile the objective.
+def _batch_objective(objective: Objective, designs):
+    """$J$ of designs (mm), shape (P, 6)."""
+    # A fixed dtype without weak typing, so every caller hits the same compiled program.
+    return _batch_objective_jit(objective, jnp.asarray(designs, objective.torques.dtype))
+
+
+def _batch_value_and_grad(objective: Objective, space: DesignSpace, units):
+    """$J$ and $\\partial J/\\partial x$ at unit-cube points, shape (K, 6), one program."""
+    return _batch_value_and_grad_jit(objective, space, jnp.asarray(units, objective.torques.dtype))
+
+
+@eqx.filter_jit
+def _batch_objective_jit(objective, designs):
+    return objective.batch(designs).objective
+
+
+@eqx.filter_jit
+def _batch_value_and_grad_jit(objective, space, units):
+    def one(unit):
+        return jax.value_and_grad(lambda x: objective(space.to_design(x)))(unit)
+
+    return jax.lax.map(one, units, batch_size=objective.batch_size)
+
+
+_ga_ask = eqx.filter_jit(ga_ask)
+_ga_tell = eqx.filter_jit(ga_tell)
+_gradient_step = eqx.filter_jit(gradient_step)
+
+
+def _ga_generation(objective: Objective, space: DesignSpace, config: GAConfig, state: GAState):
+    unit, state = _ga_ask(state, config)
+    designs = space.to_design(unit)
+    values = _batch_objective(objective, designs)
+    return _ga_tell(state, unit, values, config), designs, values
+
+
+def _gradient_iteration(objective: Objective, space: DesignSpace, config: GradientConfig, state: GradientState):
+    designs = space.to_design(state.position)
+    values, grads = _batch_value_and_grad(objective, space, state.position)
+    return _gradient_step(state, values, grads, config), designs, values
+
+
+# ---------------------------------------------------------------------------- run directory
+class RunDirectory:
+    """The files of one run (see the module docstring)."""
+
+    def __init__(self, path: str | os.PathLike, description: dict, resume: bool):
+        self.path = Path(path)
+        self.description = description
+        self.path.mkdir(parents=True, exist_ok=True)
+        existing = self.path / "run.json"
+        if existing.exists():
+            if not resume:
+                raise ValueError(
+                    f"run directory {self.path} already holds a run: pass resume=True (--resume) "
+                    "to continue it, or choose another directory"
+                )
+            saved = json.loads(existing.read_text())
+            if saved != json.loads(json.dumps(description)):
+                diff = sorted(k for k in set(saved) | set(description) if saved.get(k) != json.loads(json.dumps(description)).get(k))
+                raise ValueError(f"cannot resume {self.path}: the run differs in {', '.join(diff)}")
+        else:
+            _atomic_write(existing, json.dumps(description, indent=2).encode())
+
+    @property
+    def history_path(self) -> Path:
+        return self.path / "history.jsonl"
+
+    def load(self, template) -> tuple[Any, list[dict]] | None:
+        """The saved state (same structure as `template`) and the history up to it, or None."""
+        state_file = self.path / "state.npz"
+        if not state_file.exists():
+            return None
+        with np.load(state_file) as data:
+            leaves, treedef = jax.tree_util.tree_flatten(template)
+            restored = [jnp.asarray(data[f"leaf_{i}"], dtype=jnp.asarray(leaf).dtype) for i, leaf in enumerate(leaves)]
+            step = int(data["step"])
+        records = []
+        if self.history_path.exists():
+            for line in self.history_path.read_text().splitlines():
+                try:
+                    record = json.loads(line)
+                except json.JSONDecodeError:
+                    break  # a line cut by a kill
+                if record["step"] > step:
+                    break
+                records.append(record)
+        if len(records) != step:
+            raise ValueError(f"cannot resume {self.path}: history has {len(records)} finished steps, state has {step}")
+        _atomic_write(self.history_path, "".join(json.dumps(r) + "\n" for r in records).encode())
+        return jax.tree_util.tree_unflatten(treedef, restored), records
+
+    def save(self, state, record: dict) -> None:
+        """Append the step's record, then replace the state (the order resume relies on)."""
+        with open(self.history_path, "a") as f:
+            f.write(json.dumps(record) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        arrays = {f"leaf_{i}": np.asarray(leaf) for i, leaf in enumerate(jax.tree_util.tree_leaves(state))}
+        arrays["step"] = np.asarray(record["step"])
+        tmp = self.path / "state.tmp.npz"
+        with open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, self.path / "state.npz")
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+# ---------------------------------------------------------------------------- progress
+class _Progress:
+    """A tqdm bar on a terminal, plain lines otherwise ("lines"), or nothing (None)."""
+
+    def __init__(self, mode: str | None, total: int, done: int, label: str):
+        if mode == "auto":
+            mode = "bar" if sys.stderr.isatty() else "lines"
+        self.mode, self.label, self.total, self.bar = mode, label, total, None
+        if mode == "bar":
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, initial=done, desc=label, unit=label.split()[0], file=sys.stderr)
+
+    def update(self, step: int, best: float, elapsed: float) -> None:
+        if self.mode == "bar":
+            self.bar.set_postfix(best=f"{best:.6g}", elapsed=f"{elapsed:.0f}s")
+            self.bar.update(1)
+        elif self.mode == "lines":
+            print(f"{self.label} {step}/{self.total}  best {best:.6g}  elapsed {elapsed:.1f} s", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+# ---------------------------------------------------------------------------- drivers
+def _description(method, objective: Objective, space: DesignSpace, config, seed, steps) -> dict:
+    o = objective
+    return {
+        "method": method,
+        "seed": int(seed),
+        "steps": int(steps),
+        "config": {f.name: getattr(config, f.name) for f in dataclasses.fields(config)},
+        "lower_mm": np.asarray(space.lower).tolist(),
+        "upper_mm": np.asarray(space.upper).tolist(),
+        "objective": {
+            "quantity": o.quantity,
+            "aggregate": o.aggregate,
+            "torques_Nmm": np.asarray(o.torques).tolist(),
+            "weights": np.asarray(o.weights).tolist(),
+            "error_samples": o.samples,
+            "errors_mm": {k: np.asarray(getattr(o.errors, k)).tolist() for k in ("base_pitch_deviation", "pitch_deviation", "misalignment")},
+            "penalties": [None if p is None else [p.limit, p.weight] for p in (o.pressure_penalty, o.lte_penalty)],
+            "accuracy": repr(o.scene.accuracy),
+        },
+    }
+
+
+def _initial_objective(method: str, objective: Objective, space: DesignSpace, design, batch: int) -> float:
+    """J of the scene's own design, through the batch program the run compiles anyway
+    (the batch holds copies of the design: a few evaluations instead of a compilation)."""
+    tiled = jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype), (batch, 6))
+    if method == "ga":
+        return float(_batch_objective(objective, tiled)[0])
+    return float(_batch_value_and_grad(objective, space, space.to_unit(tiled))[0][0])
+
+
+def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch):
+    check_int("steps (generations or iterations)", steps, 1)
+    if not isinstance(objective, Objective):
+        raise ValueError("objective must be a gearjax.optimize.Objective (Objective.create(scene, ...))")
+    start = time.perf_counter()
+    directory = None
+    records: list[dict] = []
+    state = init_state
+    if run_dir is not None:
+        directory = RunDirectory(run_dir, _description(method, objective, space, config, seed, steps), resume)
+        loaded = directory.load(init_state) if resume else None
+        if loaded is not None:
+            state, records = loaded
+    previous_time = records[-1]["elapsed_s"] if records else 0.0
+    initial_design = np.asarray(objective.scene.modification.as_vector())
+    initial = records[0]["initial_objective"] if records else _initial_objective(method, objective, space, initial_design, batch)
+    samples = int(objective.torques.shape[0]) * objective.samples
+    bar = _Progress(progress, steps, len(records), "generation" if method == "ga" else "iteration")
+    try:
+        for step in range(len(records) + 1, steps + 1):
+            state, designs, values = step_fn(state)
+            best, best_design = _best(method, state, space)
+            elapsed = previous_time + time.perf_counter() - start
+            record = {
+                "step": step,
+                "designs_mm": np.asarray(designs).tolist(),
+                "objective": [float(v) for v in np.asarray(values)],
+                "best_objective": best,
+                "best_design_mm": best_design.tolist(),
+                "evaluations": step * batch * samples,
+                "elapsed_s": elapsed,
+                "initial_objective": initial,
+                "random_key": np.asarray(getattr(state, "key", jnp.zeros(2, jnp.uint32))).tolist(),
+            }
+            records.append(record)
+            if directory is not None:
+                directory.save(state, record)
+            bar.update(step, best, elapsed)
+            if method == "gradient" and not bool(np.any(np.asarray(state.active))):
+                break
+    finally:
+        bar.close()
+    best, best_design = _best(method, state, space)
+    history = [r["best_objective"] for r in records]
+    if method == "gradient":
+        converged = not bool(np.any(np.asarray(state.active)))
+    else:
+        tail = history[-max(2, len(history) // 4):]
+        converged = len(history) >= 4 and tail[0] == tail[-1]
+    evaluations = len(records) * batch * samples
+    return OptimizationResult(
+        method=method,
+        best_design=best_design,
+        best_objective=best,
+        initial_objective=float(initial),
+        initial_design=initial_design,
+        history=history,
+        evaluations=evaluations,
+        gradient_evaluations=evaluations if method == "gradient" else 0,
+        steps=len(records),
+        wall_time_s=previous_time + time.perf_counter() - start,
+        converged=converged,
+        run_dir=None if directory is None else str(directory.path),
+    )
+
+
+def _best(method, state, space: DesignSpace) -> tuple[float, np.ndarray]:
+    """Best value and design (mm) so far."""
+    if method == "ga":
+        return float(state.best_fitness), np.asarray(space.to_design(state.best))
+    i = int(np.argmin(np.asarray(state.best_value)))
+    return float(state.best_value[i]), np.asarray(space.to_design(state.best[i]))
+
+
+def genetic(
+    objective: Objective,
+    space: DesignSpace,
+    *,
+    config: GAConfig | None = None,
+    generations: int = 30,
+    seed: int = 0,
+    run_dir: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: str | None = None,
+) -> OptimizationResult:
+    """Minimise the objective with the genetic algorithm (`gearjax.optimize.ga`).
+
+    One compiled call per generation evaluates the whole population (`Objective.batch`).
+
+    Args:
+        objective: the `Objective`.
+        space: the `DesignSpace` (bounds in mm).
+        config: `GAConfig` (default seed 001's population 40).
+        generations: generations to run (seed 001: 30).
+        seed: random seed; the same seed gives the same run bit for bit.
+        run_dir: directory for the run's files (see the module docstring), or None.
+        resume: continue the run in `run_dir`.
+        progress: "auto" (a tqdm bar on a terminal, else plain lines), "bar", "lines" or
+            None (quiet).
+    """
+    config = GAConfig() if config is None else config
+    space.check_fits(objective.scene)
+    state = ga_init(jax.random.PRNGKey(seed), config, 6)
+    state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
+    step = lambda s: _ga_generation(objective, space, config, s)  # noqa: E731
+    return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step, config.population)
+
+
+def gradient_descent(
+    objective: Objective,
+    space: DesignSpace,
+    *,
+    config: GradientConfig | None = None,
+    seed: int = 0,
+    run_dir: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: str | None = None,
+) -> OptimizationResult:
+    """Minimise the objective by projected Adam from `config.starts` Latin-hypercube starts
+    (`gearjax.optimize.gradient`), all starts in one compiled call per iteration.
+
+    Arguments as for `genetic`; `config.iterations` caps the iterations.
+    """
+    config = GradientConfig() if config is None else config
+    space.check_fits(objective.scene)
+    state = gradient_init(jax.random.PRNGKey(seed), config, 6)
+    state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
+    step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
+    return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step, config.starts)

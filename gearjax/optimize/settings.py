@@ -1,0 +1,192 @@
+"""The `[optimize]` section of a scene file: what `gearjax optimize` runs.
+
+Every key is optional (defaults in brackets); units are those of the scene file:
+
+    [optimize]
+    method = "ga"                 # "ga" | "gradient" ["ga"]
+    objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) ["force"]
+    loads_Nm = [400, 1000, 1600]  # load spectrum [the scene's torque]
+    load_weights = [1, 2, 1]      # one per load, sum > 0 [equal]
+    aggregate = "mean"            # "mean" (weighted) | "max" over the loads ["mean"]
+    error_samples = 8             # sampled mesh errors, 0 = the scene's own errors [0]
+    misalignment_um = 10.0        # tolerance: f_ma ~ U(-t, t) [0]
+    base_pitch_deviation_um = 5.0 # tolerance: f_pb ~ U(-t, t) [0]
+    max_pressure_MPa = 1500.0     # penalty limit on the largest Hertz pressure [none]
+    pressure_penalty = 1000.0     # its weight, in the objective's unit [1000]
+    max_lte_um = 2.0              # penalty limit on the loaded TE peak-to-peak [none]
+    lte_penalty = 1000.0          # its weight [1000]
+    accuracy = "fast"             # accuracy preset of the search ["fast"]
+    population = 40               # GA [40]
+    generations = 30              # GA [30]
+    starts = 8                    # gradient [8]
+    iterations = 40               # gradient [40]
+    learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
+    seed = 0                      # [0]
+    root_relief_um = [5, 75]      # bounds, one key per parameter (the [modification]
+    tip_relief_um = [5, 75]       #   keys), [lower, upper]; seed 001's by default:
+    root_relief_length = [0.5, 4] #   amounts 0.001-0.015 m_n, lengths 0.1-0.8 m_n,
+    tip_relief_length = [0.5, 4]  #   unmodified_length 0-0.5 b
+    crowning_um = [5, 75]
+    unmodified_length = [0, 21]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from ..accuracy import Accuracy
+from ..scene import Scene
+from .ga import GAConfig
+from .gradient import GradientConfig
+from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
+from .run import METHODS
+from .space import PARAMETERS, SCENE_KEYS, DesignSpace
+
+_KEYS = {
+    "method", "objective", "loads_Nm", "load_weights", "aggregate", "error_samples", "misalignment_um",
+    "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
+    "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "seed",
+} | {key for key, _ in SCENE_KEYS}
+
+
+class SettingsError(ValueError):
+    """A bad `[optimize]` section; the message names the field as `optimize.key`."""
+
+
+def _fail(key: str, message: str) -> SettingsError:
+    return SettingsError(f"optimize.{key}: {message}")
+
+
+def _number(key: str, value: Any, low: float | None = None, integer: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
+        raise _fail(key, f"must be {'an integer' if integer else 'a number'}; got {value!r}")
+    if value != value or value in (float("inf"), float("-inf")):
+        raise _fail(key, f"must be finite; got {value!r}")
+    if low is not None and value < low:
+        raise _fail(key, f"must be >= {low:g}; got {value!r}")
+    return value
+
+
+def _choice(key: str, value: Any, choices: tuple) -> str:
+    if value not in choices:
+        raise _fail(key, f"must be one of {', '.join(map(repr, choices))}; got {value!r}")
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class OptimizeSettings:
+    """The parsed `[optimize]` section (scene-file units)."""
+
+    method: str = "ga"
+    objective: str = "force"
+    loads_Nm: tuple[float, ...] | None = None
+    load_weights: tuple[float, ...] | None = None
+    aggregate: str = "mean"
+    error_samples: int = 0
+    misalignment_um: float = 0.0
+    base_pitch_deviation_um: float = 0.0
+    max_pressure_MPa: float | None = None
+    pressure_penalty: float = 1000.0
+    max_lte_um: float | None = None
+    lte_penalty: float = 1000.0
+    accuracy: str = "fast"
+    population: int = 40
+    generations: int = 30
+    starts: int = 8
+    iterations: int = 40
+    learning_rate: float = 0.05
+    seed: int = 0
+    bounds: dict = dataclasses.field(default_factory=dict)  # parameter -> (lo, hi) in mm
+
+    @classmethod
+    def from_dict(cls, table: dict) -> "OptimizeSettings":
+        if not isinstance(table, dict):
+            raise SettingsError("optimize: must be a TOML table")
+        for key in table:
+            if key not in _KEYS:
+                raise _fail(key, f"unknown field; allowed: {', '.join(sorted(_KEYS))}")
+        out: dict[str, Any] = {}
+        if "method" in table:
+            out["method"] = _choice("method", table["method"], METHODS)
+        if "objective" in table:
+            out["objective"] = _choice("objective", table["objective"], QUANTITIES)
+        if "aggregate" in table:
+            out["aggregate"] = _choice("aggregate", table["aggregate"], AGGREGATES)
+        if "accuracy" in table:
+            out["accuracy"] = _choice("accuracy", table["accuracy"], ("fast", "default", "reference"))
+        for key in ("loads_Nm", "load_weights"):
+            if key in table:
+                value = table[key]
+                if not isinstance(value, list) or not value:
+                    raise _fail(key, f"must be a non-empty list of numbers; got {value!r}")
+                out[key] = tuple(float(_number(key, v, 0.0)) for v in value)
+        if "loads_Nm" in out and any(v <= 0.0 for v in out["loads_Nm"]):
+            raise _fail("loads_Nm", f"must be torques > 0 N·m; got {list(out['loads_Nm'])}")
+        for key, low in (("error_samples", 0), ("population", 2), ("generations", 1), ("starts", 1),
+                         ("iterations", 1), ("seed", 0)):
+            if key in table:
+                out[key] = int(_number(key, table[key], low, integer=True))
+        for key in ("misalignment_um", "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty",
+                    "max_lte_um", "lte_penalty", "learning_rate"):
+            if key in table:
+                out[key] = float(_number(key, table[key], 0.0))
+        bounds = {}
+        for (key, factor), name in zip(SCENE_KEYS, PARAMETERS):
+            if key in table:
+                value = table[key]
+                if not isinstance(value, list) or len(value) != 2:
+                    raise _fail(key, f"must be [lower, upper]; got {value!r}")
+                lo, hi = (float(_number(key, v)) / factor for v in value)
+                bounds[name] = (lo, hi)
+        out["bounds"] = bounds
+        return cls(**out)
+
+    def build(self, scene: Scene) -> tuple[Objective, DesignSpace]:
+        """The objective (at this section's accuracy) and the design space of `scene`."""
+        if scene.operating.torque is None or "impact" not in scene.effects:
+            raise SettingsError(
+                "optimize: the scene needs a torque ([operating] torque_Nm) and effects = [\"impact\"] ([analysis])"
+            )
+        try:
+            space = DesignSpace.for_scene(scene, **self.bounds)
+        except ValueError as err:
+            raise SettingsError(f"optimize: {err}") from None
+        scene = _with_accuracy(scene, Accuracy.preset(self.accuracy))
+        errors = None
+        if self.error_samples > 0:
+            errors = sample_errors(
+                self.error_samples,
+                misalignment=self.misalignment_um * 1e-3,
+                base_pitch_deviation=self.base_pitch_deviation_um * 1e-3,
+                seed=self.seed,
+            )
+        pressure = None if self.max_pressure_MPa is None else Penalty(self.max_pressure_MPa, self.pressure_penalty)
+        lte = None if self.max_lte_um is None else Penalty(self.max_lte_um * 1e-3, self.lte_penalty)
+        try:
+            objective = Objective.create(
+                scene,
+                torques_Nm=self.loads_Nm,
+                weights=self.load_weights,
+                quantity=self.objective,
+                aggregate=self.aggregate,
+                errors=errors,
+                pressure_penalty=pressure,
+                lte_penalty=lte,
+            )
+        except ValueError as err:
+            raise SettingsError(f"optimize: {err}") from None
+        return objective, space
+
+    def ga_config(self) -> GAConfig:
+        return GAConfig(population=self.population, elite=max(1, min(2, self.population - 1)))
+
+    def gradient_config(self) -> GradientConfig:
+        return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate)
+
+
+def _with_accuracy(scene: Scene, accuracy: Accuracy) -> Scene:
+    """The scene with another (static) accuracy."""
+    if scene.accuracy == accuracy:
+        return scene
+    return dataclasses.replace(scene, accuracy=accuracy)
