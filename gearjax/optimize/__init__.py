@@ -27,3 +27,5 @@ from .space import (
     design_dict as design_dict,
     modification_from_design as modification_from_design,
 )
+from .sensitivity import sensitivities as sensitivities, sensitivity_table as sensitivity_table
+from .settings import OptimizeSettings as OptimizeSettings, SettingsError as SettingsError

@@ -88,7 +88,8 @@ def latin_hypercube(key: Array, count: int, dimension: int) -> Float[Array, "cou
     (McKay, Beckman & Conover 1979)."""
     k_perm, k_jitter = jax.random.split(key)
     perms = jax.vmap(lambda k: jax.random.permutation(k, count))(jax.random.split(k_perm, dimension)).T
-    return (perms + jax.random.uniform(k_jitter, (count, dimension))) / count
+    jitter = jax.random.uniform(k_jitter, (count, dimension))
+    return (perms.astype(jitter.dtype) + jitter) / count
 
 
 def gradient_init(key: Array, config: GradientConfig, dimension: int, initial: Array | None = None) -> GradientState:
@@ -122,7 +123,10 @@ def gradient_step(state: GradientState, value: Float[Array, " K"], grad: Float[A
     best = jnp.where(improved[:, None], state.position, state.best)
     best_value = jnp.where(improved, value, state.best_value)
     stalled = jnp.where(significant | ~jnp.isfinite(state.best_value), 0, state.stalled + 1)
-    updates, opt_state = config.optimizer().update(jnp.where(ok[:, None], grad, 0.0), state.opt_state, state.position)
+    # optax's bias correction raises a float to an int32 step count, which JAX's strict
+    # dtype promotion (a user setting) would refuse.
+    with jax.numpy_dtype_promotion("standard"):
+        updates, opt_state = config.optimizer().update(jnp.where(ok[:, None], grad, 0.0), state.opt_state, state.position)
     stepped = optax.projections.projection_box(optax.apply_updates(state.position, updates), 0.0, 1.0)
     retreat = 0.5 * (state.position + best)
     moved = jnp.where(ok[:, None], stepped, retreat)

@@ -27,6 +27,8 @@ batching saves; on an accelerator set a larger `batch_size`.
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -186,14 +188,8 @@ class Objective(eqx.Module):
             errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], base)
         elif not isinstance(errors, MeshErrors) or jnp.ndim(errors.misalignment) != 1:
             raise ValueError("errors must be a MeshErrors with one leading sample axis (see sample_errors)")
-        if scene.errors is None:
-            scene = Scene(
-                scene.pair, scene.modification, gear_modification=scene.gear_modification,
-                errors=MeshErrors(), operating=scene.operating, material=scene.material,
-                compliance=scene.compliance, hub_radius=scene.hub_radius, inertia=scene.inertia,
-                effects=scene.effects, accuracy=scene.accuracy, pairs=scene.pairs,
-                pitches=scene.pitches, extended_contact=scene.extended_contact,
-            )
+        if scene.errors is None:  # the samples replace the errors: the scene needs the slot
+            scene = dataclasses.replace(scene, errors=MeshErrors())
         scene = _prepare(scene)
         dtype = jnp.float32 if scene.accuracy.dtype == "float32" else jnp.float64
         errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), errors)

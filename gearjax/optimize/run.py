@@ -33,6 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._custom_types import ArrayLike
 from .._validate import check_int
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
@@ -330,6 +331,16 @@ def _best(method, state, space: DesignSpace) -> tuple[float, np.ndarray]:
     return float(state.best_value[i]), np.asarray(space.to_design(state.best[i]))
 
 
+def _unit(space: DesignSpace, designs):
+    """Unit-cube coordinates of designs (mm), or None."""
+    if designs is None:
+        return None
+    designs = np.atleast_2d(np.asarray(designs, dtype=float))
+    if designs.shape[-1] != 6 or not np.all(np.isfinite(designs)):
+        raise ValueError(f"initial designs must be finite (y1..y6) rows in mm; got shape {designs.shape}")
+    return np.asarray(space.to_unit(designs))
+
+
 def genetic(
     objective: Objective,
     space: DesignSpace,
@@ -340,6 +351,7 @@ def genetic(
     run_dir: str | os.PathLike | None = None,
     resume: bool = False,
     progress: str | None = None,
+    initial: ArrayLike | None = None,
 ) -> OptimizationResult:
     """Minimise the objective with the genetic algorithm (`gearjax.optimize.ga`).
 
@@ -355,10 +367,12 @@ def genetic(
         resume: continue the run in `run_dir`.
         progress: "auto" (a tqdm bar on a terminal, else plain lines), "bar", "lines" or
             None (quiet).
+        initial: designs (mm, shape (m, 6)) placed in the first population (or used as the
+            first starts), clipped to the bounds; by default the first population is random.
     """
     config = GAConfig() if config is None else config
     space.check_fits(objective.scene)
-    state = ga_init(jax.random.PRNGKey(seed), config, 6)
+    state = ga_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _ga_generation(objective, space, config, s)  # noqa: E731
     return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step, config.population)
@@ -373,6 +387,7 @@ def gradient_descent(
     run_dir: str | os.PathLike | None = None,
     resume: bool = False,
     progress: str | None = None,
+    initial: ArrayLike | None = None,
 ) -> OptimizationResult:
     """Minimise the objective by projected Adam from `config.starts` Latin-hypercube starts
     (`gearjax.optimize.gradient`), all starts in one compiled call per iteration.
@@ -381,7 +396,7 @@ def gradient_descent(
     """
     config = GradientConfig() if config is None else config
     space.check_fits(objective.scene)
-    state = gradient_init(jax.random.PRNGKey(seed), config, 6)
+    state = gradient_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
     return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step, config.starts)

@@ -1,0 +1,307 @@
+"""gearjax.optimize: objective, GA, gradient descent, run directories, sensitivities, CLI.
+
+One objective structure for the whole file (seed 001 pair, `fast` accuracy, 1000 N·m,
+5000 rpm), so its two compiled programs (the batch of 12 values; values and gradients of
+2 designs) are compiled once and shared by every test.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import gearjax as gj
+from gearjax import optimize as go
+from gearjax.optimize.run import _batch_objective, _batch_value_and_grad
+from gearjax.papers.seed001 import paper_optimum
+
+POPULATION = 12
+STARTS = 2
+GENERATIONS = 12
+
+
+@pytest.fixture(scope="module")
+def scene(seed_pair):
+    return gj.Scene(
+        seed_pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+        effects=("impact",), accuracy="fast",
+    )
+
+
+@pytest.fixture(scope="module")
+def objective(scene):
+    return go.Objective.create(scene)
+
+
+@pytest.fixture(scope="module")
+def space(scene):
+    # the paper's optimum (y4 = 4.3 mm) needs a wider tip-relief-length bound than its own 4.0 mm
+    return go.DesignSpace.for_scene(scene, tip_relief_length=(0.5, 4.5))
+
+
+@pytest.fixture(scope="module")
+def designs(space):
+    """Paper optimum, a deep short relief (a GA optimum: flank-on-flank engagement), and 10
+    random designs (mm)."""
+    rng = np.random.default_rng(3)
+    out = np.array(space.to_design(rng.uniform(size=(POPULATION, 6))))
+    out[0] = np.asarray(paper_optimum().as_vector())
+    out[1] = [0.0354, 0.0242, 0.763, 0.756, 0.0194, 17.8]
+    return out
+
+
+@pytest.fixture(scope="module")
+def batch_values(objective, designs):
+    return np.asarray(_batch_objective(objective, designs))
+
+
+@pytest.fixture(scope="module")
+def ga_run(objective, space, tmp_path_factory):
+    run_dir = tmp_path_factory.mktemp("ga")
+    result = go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
+                        seed=0, run_dir=run_dir)
+    return result, run_dir
+
+
+def _simulate(objective, design):
+    return gj.simulate(objective.scene_for(design))
+
+
+def test_objective_is_simulate_impact_force_and_batch_is_a_loop(objective, designs, batch_values):
+    for i in (0, 1, 5):
+        force = float(_simulate(objective, designs[i]).impact.force)
+        assert batch_values[i] == pytest.approx(force, rel=1e-9)
+    # Random design 3's gap function jumps at its first contact (a candidate appears with
+    # interference), which the first-contact search reports as unconverged: it scores +inf.
+    failed = gj.simulate(objective.scene_for(designs[3]), throw=False).impact.result
+    assert failed == gj.RESULTS.first_contact_unconverged
+    assert batch_values[3] == np.inf
+    assert np.sum(np.isfinite(batch_values)) >= POPULATION - 2
+    # rows are independent: the same designs in another order give the same values
+    order = np.arange(POPULATION)[::-1]
+    assert np.asarray(_batch_objective(objective, designs[order])) == pytest.approx(batch_values[order], rel=1e-12)
+
+
+@pytest.fixture(scope="module")
+def regimes(objective, designs):
+    return [_simulate(objective, designs[i]).impact.regime_name for i in (0, 1)]
+
+
+def test_gradient_matches_central_differences_in_both_regimes(objective, space, designs, regimes):
+    # the paper's optimum strikes with the tip edge at 1000 N·m; the long, deep relief engages flank on flank
+    assert regimes == ["edge", "surface"]
+    units = np.asarray(space.to_unit(designs[:2]))
+    values, grads = (np.asarray(a) for a in _batch_value_and_grad(objective, space, units))
+    h = 1e-5
+    for k in range(2):
+        probe = np.repeat(units[k][None], POPULATION, axis=0)
+        for i in range(6):
+            probe[2 * i, i] += h
+            probe[2 * i + 1, i] -= h
+        f = np.asarray(_batch_objective(objective, space.to_design(probe)))
+        central = (f[0::2] - f[1::2]) / (2 * h)
+        scale = np.max(np.abs(central))
+        assert values[k] == pytest.approx(float(_batch_objective(objective, np.repeat(designs[k][None], POPULATION, 0))[0]), rel=1e-9)
+        np.testing.assert_allclose(grads[k], central, rtol=1e-4, atol=1e-4 * scale)
+
+
+def test_ga_best_never_worsens_and_improves_on_the_first_population(ga_run, space):
+    result, run_dir = ga_run
+    history = np.asarray(result.history)
+    assert np.all(np.diff(history) <= 0.0)
+    assert history[-1] < history[0]
+    assert result.evaluations == POPULATION * GENERATIONS
+    records = [json.loads(line) for line in (run_dir / "history.jsonl").read_text().splitlines()]
+    assert len(records) == GENERATIONS
+    evaluated = np.array([r["designs_mm"] for r in records])
+    assert evaluated.shape == (GENERATIONS, POPULATION, 6)
+    assert space.contains(evaluated)
+    # the best of the first record is the best of its evaluated values
+    assert records[0]["best_objective"] == pytest.approx(min(records[0]["objective"]), rel=0, abs=0)
+    assert result.best_objective == pytest.approx(min(min(r["objective"]) for r in records))
+
+
+def test_ga_is_reproducible_and_a_killed_run_resumes_to_the_same_result(ga_run, objective, space, tmp_path):
+    result, run_dir = ga_run
+    killed = tmp_path / "killed"
+    script = textwrap.dedent(
+        f"""
+        import os, signal
+        import jax
+        jax.config.update("jax_enable_x64", True)
+        import gearjax as gj
+        from gearjax import optimize as go
+        from gearjax.optimize import run as run_module
+        from gearjax.papers.seed001 import paper_optimum, seed_pair
+
+        saved = run_module.RunDirectory.save
+
+        def save(self, state, record):
+            if record["step"] == 5:
+                # die between the history line and the state of step 5: the worst moment
+                with open(self.history_path, "a") as f:
+                    f.write('{{"step": 5, "partial')
+                os.kill(os.getpid(), signal.SIGKILL)
+            saved(self, state, record)
+
+        run_module.RunDirectory.save = save
+        scene = gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+                         effects=("impact",), accuracy="fast")
+        objective = go.Objective.create(scene)
+        space = go.DesignSpace.for_scene(scene, tip_relief_length=(0.5, 4.5))
+        go.genetic(objective, space, config=go.GAConfig(population={POPULATION}), generations={GENERATIONS},
+                   seed=0, run_dir={str(killed)!r})
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr[-2000:]
+    lines = (killed / "history.jsonl").read_text().splitlines()
+    assert len(lines) == 5 and lines[-1].startswith('{"step": 5, "partial')
+    with pytest.raises(ValueError, match="resume"):
+        go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
+                   seed=0, run_dir=killed)
+    resumed = go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
+                         seed=0, run_dir=killed, resume=True)
+    assert resumed.history == result.history
+    np.testing.assert_array_equal(resumed.best_design, result.best_design)
+    full = [json.loads(x) for x in (run_dir / "history.jsonl").read_text().splitlines()]
+    again = [json.loads(x) for x in (killed / "history.jsonl").read_text().splitlines()]
+    assert [r["designs_mm"] for r in again] == [r["designs_mm"] for r in full]
+    assert [r["objective"] for r in again] == [r["objective"] for r in full]
+    assert [r["random_key"] for r in again] == [r["random_key"] for r in full]
+    # a resumed run must be the same run
+    with pytest.raises(ValueError, match="differs in seed"):
+        go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
+                   seed=1, run_dir=killed, resume=True)
+
+
+def test_gradient_descent_lowers_the_objective_from_a_poor_start(objective, space):
+    poor = np.asarray(space.lower)  # the least relief the bounds allow: hard edge contact
+    result = go.gradient_descent(objective, space, config=go.GradientConfig(starts=STARTS, iterations=12),
+                                 seed=0, initial=np.stack([poor, poor + 0.25 * np.asarray(space.width)]))
+    start = result.history[0]
+    assert np.isfinite(start)
+    assert result.best_objective < 0.8 * start
+    assert np.all(np.diff(result.history) <= 0.0)
+    assert space.contains(result.best_design)
+    assert result.gradient_evaluations == result.evaluations == STARTS * result.steps
+
+
+def test_sensitivities_agree_with_the_energy_method_and_the_batch_gradient(objective, space, designs):
+    design = designs[0]
+    s = go.sensitivities(objective, design, space)
+    impact = _simulate(objective, design).impact
+    assert s["objective"] == pytest.approx(float(impact.force), rel=1e-9)
+    n = float(impact.stiffness.exponent)
+    # F_s = ((n+1)/2 m v^2)^(n/(n+1)) K^(1/(n+1)) with v proportional to the speed
+    assert s["speed"]["log_derivative"] == pytest.approx(2 * n / (n + 1), rel=1e-6)
+    _, grads = _batch_value_and_grad(objective, space, np.asarray(space.to_unit(designs[:2])))
+    per_width = np.array([e["per_bound_width"] for e in s["parameters"].values()])
+    np.testing.assert_allclose(per_width, np.asarray(grads[0]), rtol=1e-6)
+    assert set(s["errors"]) == {"base_pitch_deviation_um", "pitch_deviation_um", "misalignment_um"}
+    assert all(np.isfinite(v) for v in s["errors"].values())
+    assert "speed" in go.sensitivity_table(s)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(tip_relief=(0.05, 0.01)), "lower < upper"),
+        (dict(crowning=(0.0, float("nan"))), "finite"),
+        (dict(tip_relief_length=(0.5, 40.0)), "active flank"),
+        (dict(unmodified_length=(0.0, 42.0)), "face width"),
+        (dict(root_relief_length=(0.0, 2.0)), "lower bound of root_relief_length"),
+        (dict(bogus=(0.0, 1.0)), "unknown design parameter"),
+    ],
+)
+def test_bad_bounds_are_rejected(scene, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        go.DesignSpace.for_scene(scene, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(torques_Nm=[]), "non-empty"),
+        (dict(torques_Nm=[400.0, -1.0]), "torques_Nm"),
+        (dict(torques_Nm=[400.0, 1000.0], weights=[1.0]), "one weight per load"),
+        (dict(torques_Nm=[400.0, 1000.0], weights=[0.0, 0.0]), "positive"),
+        (dict(quantity="energy"), "quantity"),
+        (dict(aggregate="median"), "aggregate"),
+    ],
+)
+def test_bad_objective_input_is_rejected(scene, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        go.Objective.create(scene, **kwargs)
+
+
+def test_scene_without_torque_and_small_population_are_rejected(seed_pair):
+    with pytest.raises(ValueError, match="torque"):
+        go.Objective.create(gj.Scene(seed_pair, paper_optimum()))
+    with pytest.raises(ValueError, match="population"):
+        go.GAConfig(population=1)
+
+
+def _scene_file(tmp_path, optimize: str) -> str:
+    from gearjax.scene_file import DEFAULT_SCENE_TOML
+
+    text = DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"') + "\n[optimize]\n" + optimize
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.mark.parametrize(
+    "optimize, field",
+    [
+        ("method = 'annealing'\n", "optimize.method"),
+        ("objective = 'noise'\n", "optimize.objective"),
+        ("loads_Nm = []\n", "optimize.loads_Nm"),
+        ("loads_Nm = [-400.0]\n", "optimize.loads_Nm"),
+        ("loads_Nm = [400.0, 1000.0]\nload_weights = [1.0]\n", "weight"),
+        ("population = 1\n", "optimize.population"),
+        ("tip_relief_um = [50.0, 10.0]\n", "tip_relief"),
+        ("colour = 'red'\n", "optimize.colour"),
+    ],
+)
+def test_cli_rejects_a_bad_optimize_section(tmp_path, capsys, optimize, field):
+    from gearjax.cli import main
+
+    code = main(["optimize", _scene_file(tmp_path, optimize), "--out", str(tmp_path / "run"), "--no-cache"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert field in err and err.count("\n") == 1
+
+
+def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, capsys, space):
+    from gearjax.cli import main
+    from gearjax.scene_file import load_scene
+
+    path = _scene_file(tmp_path, f"population = {POPULATION}\ngenerations = 2\ntip_relief_length = [0.5, 4.5]\n")
+    out = tmp_path / "run"
+    code = main(["optimize", path, "--out", str(out), "--json", "--quiet", "--no-cache"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    o = json.loads(captured.out)["optimize"]
+    assert o["method"] == "ga" and o["evaluations"] == 2 * POPULATION and len(o["history"]) == 2
+    assert o["best_objective_N"] <= o["history"][0] and o["best_objective_N"] == o["history"][-1]
+    assert o["initial_objective_N"] == pytest.approx(9195.0, rel=0.01)  # the paper optimum at 'fast'
+    assert set(o["best_modification"]) == {"root_relief_um", "tip_relief_um", "root_relief_length",
+                                           "tip_relief_length", "crowning_um", "unmodified_length"}
+    assert "generation 2/2" in captured.err
+    best, data = load_scene(o["best_scene"])
+    np.testing.assert_allclose(np.asarray(best.modification.as_vector()),
+                               [o["best_modification"][k] * (1e-3 if k.endswith("_um") else 1.0) for k in o["best_modification"]],
+                               rtol=1e-5)
+    assert data["optimize"]["population"] == POPULATION
+    assert space.contains(np.asarray(best.modification.as_vector()), tol=1e-6)
+    # the same command again refuses to overwrite, and --resume of a finished run changes nothing
+    assert main(["optimize", path, "--out", str(out), "--no-cache"]) == 2
+    assert main(["optimize", path, "--out", str(out), "--resume", "--json", "--quiet", "--no-cache"]) == 0
+    assert json.loads(capsys.readouterr().out)["optimize"]["history"] == o["history"]
