@@ -81,7 +81,7 @@ def evaluate(designs: dict, accuracy: str) -> dict:
             base = scene(accuracy, load)
             result = gj.simulate(go.Objective.create(base).scene_for(design), throw=False)
             rows[f"{load:g}"] = {"force_N": float(result.impact.force), "regime": result.impact.regime_name,
-                                 "velocity_mm_s": float(result.impact.velocity), "result": str(result.impact.result)}
+                                 "velocity_mm_s": float(result.impact.velocity), "successful": bool(result.impact.result == gj.RESULTS.successful)}
         out[label] = rows
     return out
 
