@@ -49,7 +49,7 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
             "aggregate": objective.aggregate,
             "loads_Nm": (np.asarray(objective.torques) / 1000.0).tolist(),
             "error_samples": objective.samples,
-            "accuracy": settings.accuracy,
+            "accuracy": _accuracy_name(objective.scene.accuracy),
             "initial_objective_N": result.initial_objective,
             "best_objective_N": result.best_objective,
             "initial_modification": design_dict(result.initial_design),
@@ -69,6 +69,12 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
     else:
         print(summary(report["optimize"]))
     return 0
+
+
+def _accuracy_name(accuracy) -> str:
+    from ..accuracy import PRESETS
+
+    return next((name for name, preset in PRESETS.items() if preset == accuracy), "custom")
 
 
 def _read(path: str) -> str:

@@ -12,7 +12,8 @@ changes. The gradient there is the one-sided gradient of the branch that binds; 
 normalised steps do not blow up at such a kink, and because each start keeps its best
 point, a step that crosses into a worse branch costs an evaluation, not the progress.
 A design whose evaluation fails (objective $+\infty$, non-finite gradient) is not
-stepped from: the start moves halfway back to its best point.
+stepped from: the start moves halfway back to its best point (towards the centre of the
+box if it has none yet).
 
 **Stopping.** A start stops when its best value has not improved by more than `ftol`
 (relative) for `patience` iterations, or when its projected step is shorter than `xtol`
@@ -37,7 +38,8 @@ class GradientConfig(eqx.Module):
     Attributes:
         starts: number of starts run together (>= 1).
         iterations: cap on the iterations (>= 1).
-        learning_rate: Adam's step size in unit-cube coordinates (> 0).
+        learning_rate: Adam's initial step size in unit-cube coordinates (> 0), decaying
+            to 1 % of it over `iterations` (cosine schedule).
         ftol: relative improvement of a start's best value below which it counts as stalled.
         patience: stalled iterations after which a start stops (>= 1).
         xtol: projected step length (unit coordinates) below which a start stops.
@@ -47,7 +49,7 @@ class GradientConfig(eqx.Module):
     iterations: int = eqx.field(static=True, default=40)
     learning_rate: float = eqx.field(static=True, default=0.05)
     ftol: float = eqx.field(static=True, default=1e-3)
-    patience: int = eqx.field(static=True, default=8)
+    patience: int = eqx.field(static=True, default=12)
     xtol: float = eqx.field(static=True, default=1e-4)
 
     def __check_init__(self):
@@ -59,7 +61,10 @@ class GradientConfig(eqx.Module):
         check_range("xtol", self.xtol, 0.0, 1.0)
 
     def optimizer(self) -> optax.GradientTransformation:
-        return optax.adam(self.learning_rate)
+        """Adam with the step size decaying from `learning_rate` to 1 % of it over
+        `iterations` (cosine): constant-step Adam only settles to within about one step of
+        a minimum."""
+        return optax.adam(optax.cosine_decay_schedule(self.learning_rate, self.iterations, alpha=0.01))
 
 
 class GradientState(eqx.Module):
@@ -128,7 +133,10 @@ def gradient_step(state: GradientState, value: Float[Array, " K"], grad: Float[A
     with jax.numpy_dtype_promotion("standard"):
         updates, opt_state = config.optimizer().update(jnp.where(ok[:, None], grad, 0.0), state.opt_state, state.position)
     stepped = optax.projections.projection_box(optax.apply_updates(state.position, updates), 0.0, 1.0)
-    retreat = 0.5 * (state.position + best)
+    # A start that has never had a finite value has no best point: it moves towards the
+    # centre of the box instead.
+    anchor = jnp.where(jnp.isfinite(best_value)[:, None], best, 0.5)
+    retreat = 0.5 * (state.position + anchor)
     moved = jnp.where(ok[:, None], stepped, retreat)
     step = jnp.linalg.norm(moved - state.position, axis=-1)
     active = state.active & (stalled < config.patience) & ~(ok & (step < config.xtol))

@@ -15,7 +15,7 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     pressure_penalty = 1000.0     # its weight, in the objective's unit [1000]
     max_lte_um = 2.0              # penalty limit on the loaded TE peak-to-peak [none]
     lte_penalty = 1000.0          # its weight [1000]
-    accuracy = "fast"             # accuracy preset of the search ["fast"]
+    accuracy = "default"          # accuracy preset of the search [the scene's]
     population = 40               # GA [40]
     generations = 30              # GA [30]
     starts = 8                    # gradient [8]
@@ -90,7 +90,7 @@ class OptimizeSettings:
     pressure_penalty: float = 1000.0
     max_lte_um: float | None = None
     lte_penalty: float = 1000.0
-    accuracy: str = "fast"
+    accuracy: str | None = None  # None: the scene's own
     population: int = 40
     generations: int = 30
     starts: int = 8
@@ -152,7 +152,8 @@ class OptimizeSettings:
             space = DesignSpace.for_scene(scene, **self.bounds)
         except ValueError as err:
             raise SettingsError(f"optimize: {err}") from None
-        scene = _with_accuracy(scene, Accuracy.preset(self.accuracy))
+        if self.accuracy is not None:
+            scene = _with_accuracy(scene, Accuracy.preset(self.accuracy))
         errors = None
         if self.error_samples > 0:
             errors = sample_errors(
