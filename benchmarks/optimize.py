@@ -20,13 +20,11 @@ jax.config.update("jax_enable_x64", True)
 
 import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
+from _common import RESULTS, machine, time_compiled_output  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
-
-from _common import RESULTS, machine, time_compiled_output  # noqa: E402
 
 
 def main() -> None:

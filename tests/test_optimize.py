@@ -6,7 +6,6 @@ One objective structure for the whole file (seed 001 pair, `fast` accuracy, 1000
 """
 
 import json
-import os
 import signal
 import subprocess
 import sys

@@ -29,7 +29,13 @@ import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
-from gearjax.papers.seed001 import SEED_001_NOTE, TABLE2_OPTIMUM_UM, TABLE4_IMPACT_FORCE, paper_optimum, seed_pair  # noqa: E402
+from gearjax.papers.seed001 import (  # noqa: E402
+    SEED_001_NOTE,
+    TABLE2_OPTIMUM_UM,
+    TABLE4_IMPACT_FORCE,
+    paper_optimum,
+    seed_pair,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 LOADS = (400.0, 1000.0, 1600.0)

@@ -6,26 +6,54 @@ function of the design vector over a load spectrum and error samples) → an opt
 Adam) that writes every step to a run directory and resumes exactly.
 """
 
-from .ga import GAConfig as GAConfig, GAState as GAState, ga_ask as ga_ask, ga_init as ga_init, ga_tell as ga_tell
+from .ga import GAConfig as GAConfig
+from .ga import GAState as GAState
+from .ga import ga_ask as ga_ask
+from .ga import ga_init as ga_init
+from .ga import ga_tell as ga_tell
 from .gradient import (
     GradientConfig as GradientConfig,
+)
+from .gradient import (
     GradientState as GradientState,
+)
+from .gradient import (
     gradient_init as gradient_init,
+)
+from .gradient import (
     gradient_step as gradient_step,
+)
+from .gradient import (
     latin_hypercube as latin_hypercube,
 )
 from .objective import (
     Evaluation as Evaluation,
+)
+from .objective import (
     Objective as Objective,
+)
+from .objective import (
     Penalty as Penalty,
+)
+from .objective import (
     sample_errors as sample_errors,
 )
-from .run import OptimizationResult as OptimizationResult, genetic as genetic, gradient_descent as gradient_descent
+from .run import OptimizationResult as OptimizationResult
+from .run import genetic as genetic
+from .run import gradient_descent as gradient_descent
+from .sensitivity import sensitivities as sensitivities
+from .sensitivity import sensitivity_table as sensitivity_table
+from .settings import OptimizeSettings as OptimizeSettings
+from .settings import SettingsError as SettingsError
 from .space import (
     PARAMETERS as PARAMETERS,
+)
+from .space import (
     DesignSpace as DesignSpace,
+)
+from .space import (
     design_dict as design_dict,
+)
+from .space import (
     modification_from_design as modification_from_design,
 )
-from .sensitivity import sensitivities as sensitivities, sensitivity_table as sensitivity_table
-from .settings import OptimizeSettings as OptimizeSettings, SettingsError as SettingsError

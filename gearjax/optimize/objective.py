@@ -42,7 +42,7 @@ from ..impact import ImpactRegime, impact_analysis
 from ..ltca import loaded_contact_analysis
 from ..scene import Scene, _prepare
 from ..tca import tooth_contact_analysis
-from .space import DesignSpace, modification_from_design
+from .space import modification_from_design
 
 QUANTITIES = ("force", "velocity")
 AGGREGATES = ("mean", "max")
@@ -135,7 +135,7 @@ class Objective(eqx.Module):
         pressure_penalty: Penalty | None = None,
         lte_penalty: Penalty | None = None,
         batch_size: int = 1,
-    ) -> "Objective":
+    ) -> Objective:
         """Check the inputs and build the objective.
 
         Args:
@@ -284,7 +284,7 @@ def sample_errors(
     )
 
 
-def design_of(scene: Scene) -> Float[Array, "6"]:
+def design_of(scene: Scene) -> Float[Array, 6]:
     """The scene's pinion modification as a design vector (mm)."""
     return scene.modification.as_vector()
 

@@ -21,12 +21,9 @@ designs, values and history of an uninterrupted one.
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 import sys
 import time
-from pathlib import Path
-from typing import Any
 
 import equinox as eqx
 import jax
@@ -38,6 +35,7 @@ from .._validate import check_int
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
 from .objective import Objective
+from .rundir import RunDirectory
 from .space import DesignSpace
 
 METHODS = ("ga", "gradient")
@@ -123,81 +121,6 @@ def _gradient_iteration(objective: Objective, space: DesignSpace, config: Gradie
     designs = space.to_design(state.position)
     values, grads = _batch_value_and_grad(objective, space, state.position)
     return _gradient_step(state, values, grads, config), designs, values
-
-
-# ---------------------------------------------------------------------------- run directory
-class RunDirectory:
-    """The files of one run (see the module docstring)."""
-
-    def __init__(self, path: str | os.PathLike, description: dict, resume: bool):
-        self.path = Path(path)
-        self.description = description
-        self.path.mkdir(parents=True, exist_ok=True)
-        existing = self.path / "run.json"
-        if existing.exists():
-            if not resume:
-                raise ValueError(
-                    f"run directory {self.path} already holds a run: pass resume=True (--resume) "
-                    "to continue it, or choose another directory"
-                )
-            saved = json.loads(existing.read_text())
-            if saved != json.loads(json.dumps(description)):
-                diff = sorted(k for k in set(saved) | set(description) if saved.get(k) != json.loads(json.dumps(description)).get(k))
-                raise ValueError(f"cannot resume {self.path}: the run differs in {', '.join(diff)}")
-        else:
-            _atomic_write(existing, json.dumps(description, indent=2).encode())
-
-    @property
-    def history_path(self) -> Path:
-        return self.path / "history.jsonl"
-
-    def load(self, template) -> tuple[Any, list[dict]] | None:
-        """The saved state (same structure as `template`) and the history up to it, or None."""
-        state_file = self.path / "state.npz"
-        if not state_file.exists():
-            return None
-        with np.load(state_file) as data:
-            leaves, treedef = jax.tree_util.tree_flatten(template)
-            restored = [jnp.asarray(data[f"leaf_{i}"], dtype=jnp.asarray(leaf).dtype) for i, leaf in enumerate(leaves)]
-            step = int(data["step"])
-        records = []
-        if self.history_path.exists():
-            for line in self.history_path.read_text().splitlines():
-                try:
-                    record = json.loads(line)
-                except json.JSONDecodeError:
-                    break  # a line cut by a kill
-                if record["step"] > step:
-                    break
-                records.append(record)
-        if len(records) != step:
-            raise ValueError(f"cannot resume {self.path}: history has {len(records)} finished steps, state has {step}")
-        _atomic_write(self.history_path, "".join(json.dumps(r) + "\n" for r in records).encode())
-        return jax.tree_util.tree_unflatten(treedef, restored), records
-
-    def save(self, state, record: dict) -> None:
-        """Append the step's record, then replace the state (the order resume relies on)."""
-        with open(self.history_path, "a") as f:
-            f.write(json.dumps(record) + "\n")
-            f.flush()
-            os.fsync(f.fileno())
-        arrays = {f"leaf_{i}": np.asarray(leaf) for i, leaf in enumerate(jax.tree_util.tree_leaves(state))}
-        arrays["step"] = np.asarray(record["step"])
-        tmp = self.path / "state.tmp.npz"
-        with open(tmp, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, self.path / "state.npz")
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
 
 
 # ---------------------------------------------------------------------------- progress

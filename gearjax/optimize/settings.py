@@ -100,7 +100,7 @@ class OptimizeSettings:
     bounds: dict = dataclasses.field(default_factory=dict)  # parameter -> (lo, hi) in mm
 
     @classmethod
-    def from_dict(cls, table: dict) -> "OptimizeSettings":
+    def from_dict(cls, table: dict) -> OptimizeSettings:
         if not isinstance(table, dict):
             raise SettingsError("optimize: must be a TOML table")
         for key in table:

@@ -52,8 +52,8 @@ class DesignSpace(eqx.Module):
         lower, upper: bounds of $(y_1, \\dots, y_6)$ (mm), shape (6,), lower < upper.
     """
 
-    lower: Float[Array, "6"]
-    upper: Float[Array, "6"]
+    lower: Float[Array, 6]
+    upper: Float[Array, 6]
 
     def __init__(self, lower: ArrayLike, upper: ArrayLike):
         lower = np.asarray(lower, dtype=float)
@@ -78,7 +78,7 @@ class DesignSpace(eqx.Module):
         self.upper = jnp.asarray(upper)
 
     @classmethod
-    def seed001(cls, normal_module: float, face_width: float, **overrides) -> "DesignSpace":
+    def seed001(cls, normal_module: float, face_width: float, **overrides) -> DesignSpace:
         """Seed 001's bounds for a pair of normal module $m_n$ and face width $b$ (mm):
         amounts $[0.001, 0.015]\\,m_n$, lengths $[0.1, 0.8]\\,m_n$, $y_6 \\in [0, 0.5\\,b]$.
 
@@ -97,7 +97,7 @@ class DesignSpace(eqx.Module):
         return cls(lower, upper)
 
     @classmethod
-    def for_scene(cls, scene, **overrides) -> "DesignSpace":
+    def for_scene(cls, scene, **overrides) -> DesignSpace:
         """Seed 001's bounds for the scene's pair, checked against its flank (`check_fits`)."""
         pair = scene.pair
         space = cls.seed001(float(np.min(pair.normal_module)), float(np.min(pair.face_width)), **overrides)
@@ -105,7 +105,7 @@ class DesignSpace(eqx.Module):
         return space
 
     @property
-    def width(self) -> Float[Array, "6"]:
+    def width(self) -> Float[Array, 6]:
         """Bound widths $y_\\text{hi} - y_\\text{lo}$ (mm)."""
         return self.upper - self.lower
 
