@@ -33,3 +33,16 @@ def spur_pair():
     from gearjax import InvoluteGearPair
 
     return InvoluteGearPair((23, 41), 4.0, 20.0, 0.0, 20.0)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _release_compiled_programs():
+    """Each test file shares its compiled programs through module-scoped fixtures; once the
+    file is done they are dropped, so a worker that runs many files does not accumulate them
+    (the larger impact and optimisation programs take gigabytes, and two workers share the
+    24 GB machine)."""
+    yield
+    import gc
+
+    jax.clear_caches()
+    gc.collect()
