@@ -1,14 +1,21 @@
 """Test configuration: float64 and strict dtype promotion, as the engine's reference.
 
 The command-line tests run `gearjax.cli.main` in-process, and the command enables JAX's
-persistent compilation cache; it goes to a directory under the system's temporary
-directory rather than the user's cache.
+persistent compilation cache; it goes to a new temporary directory of this process (each
+xdist worker has its own), never the user's cache and never one that another run, or the
+other worker, writes at the same time: JAX writes its cache entries in place, without a
+lock unless a size limit is set.
 """
 
+import atexit
 import os
+import shutil
 import tempfile
 
-os.environ.setdefault("GEARJAX_CACHE_DIR", os.path.join(tempfile.gettempdir(), "gearjax-test-cache"))
+# Set in every process (an xdist worker inherits the controller's environment, and must not
+# share its directory), removed when the process ends.
+os.environ["GEARJAX_CACHE_DIR"] = tempfile.mkdtemp(prefix="gearjax-test-cache-")
+atexit.register(shutil.rmtree, os.environ["GEARJAX_CACHE_DIR"], ignore_errors=True)
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
@@ -40,9 +47,16 @@ def _release_compiled_programs():
     """Each test file shares its compiled programs through module-scoped fixtures; once the
     file is done they are dropped, so a worker that runs many files does not accumulate them
     (the larger impact and optimisation programs take gigabytes, and two workers share the
-    24 GB machine)."""
+    24 GB machine). Dropping them is not enough: glibc keeps the freed heap, so a worker
+    stayed at ~4 GB after compiling one impact gradient; `malloc_trim` hands it back
+    (0.7 GB after)."""
     yield
+    import ctypes
+    import ctypes.util
     import gc
 
     jax.clear_caches()
     gc.collect()
+    libc = ctypes.util.find_library("c")
+    if libc is not None and hasattr(ctypes.CDLL(libc), "malloc_trim"):
+        ctypes.CDLL(libc).malloc_trim(0)
