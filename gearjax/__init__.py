@@ -54,7 +54,15 @@ from .scene import (
     simulate as simulate,
     stack_scenes as stack_scenes,
 )
-from .sweep import LoadSweep as LoadSweep, load_sweep as load_sweep, regime_transition as regime_transition
+from .sweep import (
+    DesignSweep as DesignSweep,
+    ImpactSweep as ImpactSweep,
+    design_sweep as design_sweep,
+    LoadSweep as LoadSweep,
+    impact_sweep as impact_sweep,
+    load_sweep as load_sweep,
+    regime_transition as regime_transition,
+)
 from .tca import (
     ContactKind as ContactKind,
     TCAResult as TCAResult,

@@ -3,6 +3,7 @@
     gearjax run [SCENE.toml] [--json] [--no-cache]
     gearjax reproduce curvilinear|dca [--json] [--cross-check] [--no-cache]
     gearjax optimize [SCENE.toml] [--method ga|gradient] [--out DIR] [--resume] [--json] [--quiet]
+    gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--out DIR] [--json] [--plot]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
@@ -114,6 +115,12 @@ def _optimize(args: argparse.Namespace) -> int:
     return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from .sweep_command import run_command
+
+    return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="gearjax", description="Differentiable gear contact engine.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -134,7 +141,16 @@ def main(argv: list[str] | None = None) -> int:
     opt.add_argument("--resume", action="store_true", help="continue the run in --out")
     opt.add_argument("--json", action="store_true", help="print one JSON object")
     opt.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
-    for command in (run, rep, opt):
+    swp = sub.add_parser("sweep", help="mesh-in impact over a torque x speed grid, in one compiled call")
+    swp.add_argument("scene", nargs="?", help="TOML scene file with effects = [\"impact\"] (default: the built-in scene)")
+    swp.add_argument("--torque-Nm", required=True, dest="torque_Nm",
+                     help="pinion torques (N m): 100,400,1000 or start:stop:count")
+    swp.add_argument("--speed-rpm", required=True, dest="speed_rpm",
+                     help="pinion speeds (rpm): 1000,5000 or start:stop:count")
+    swp.add_argument("--out", help="directory for sweep.json and sweep.npz (and the plots)")
+    swp.add_argument("--json", action="store_true", help="print one JSON object")
+    swp.add_argument("--plot", action="store_true", help="also write sweep_force_map.png and sweep_harris.png (needs --out)")
+    for command in (run, rep, opt, swp):
         command.add_argument(
             "--no-cache", action="store_true",
             help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
@@ -146,6 +162,8 @@ def main(argv: list[str] | None = None) -> int:
             return _run(args)
         if args.command == "optimize":
             return _optimize(args)
+        if args.command == "sweep":
+            return _sweep(args)
         return _reproduce(args)
 
 

@@ -141,3 +141,67 @@ def mesh_stiffness(ltca, ax=None, iso=None):
     ax.legend()
     ax.grid(True, alpha=0.3)
     return ax
+
+
+def impact_force_map(torques_Nm, speeds_rpm, force_N, regime=None, ax=None, cmap="magma"):
+    """Mesh-in impact force F_s (N) over pinion torque (N·m, x) × speed (rpm, y), as
+    `gearjax sweep` or `ImpactSweep` give it (`force_N[torque][speed]`); grid points with
+    edge contact (`regime[torque][speed] == "edge"`) are marked with crosses. With a single
+    torque or speed the map is drawn as curves against the other axis."""
+    return _force_map(torques_Nm, speeds_rpm, force_N, regime, ax, cmap,
+                      ("pinion torque (N m)", "{:g} N m"), ("pinion speed (rpm)", "{:g} rpm"))
+
+
+def regime_map(values, torques_Nm, force_N, regime, name="tip relief (um)", ax=None, cmap="magma"):
+    """The regime map: impact force (colour) and edge contact (crosses) over a design
+    parameter (x; e.g. the tip relief amount of each design of a `design_sweep`) × pinion
+    torque (N·m, y); `force_N[design][torque]`, `regime[design][torque]` ("surface" |
+    "edge"). The boundary between plain cells and crosses is the torque at which the
+    modification's clearance closes at the tip edge."""
+    return _force_map(values, torques_Nm, force_N, regime, ax, cmap, (name, name + " = {:g}"),
+                      ("pinion torque (N m)", "{:g} N m"))
+
+
+def _force_map(x, y, force_N, regime, ax, cmap, x_axis, y_axis):
+    """F[x][y] as a colour map with edge contacts crossed, or as curves when an axis has
+    one value; `x_axis`, `y_axis` are (label, legend format)."""
+    ax = _axes(ax)
+    x, y, f = np.asarray(x, float), np.asarray(y, float), np.asarray(force_N, float).reshape(np.size(x), np.size(y))
+    edge = np.zeros(f.shape, bool) if regime is None else (np.asarray(regime) == "edge").reshape(f.shape)
+    if x.size > 1 and y.size > 1:
+        mesh = ax.pcolormesh(x, y, f.T, shading="nearest", cmap=cmap)
+        ax.figure.colorbar(mesh, ax=ax, label="impact force F_s (N)")
+        xx, yy = np.meshgrid(x, y, indexing="ij")
+        ax.plot(xx[edge], yy[edge], "x", color="c", ms=5, label="edge contact")
+        ax.set_xlabel(x_axis[0])
+        ax.set_ylabel(y_axis[0])
+        if edge.any():
+            ax.legend(loc="lower left")
+    else:
+        along_x = x.size > 1
+        line_axis, curve_axis = (x_axis, y_axis) if along_x else (y_axis, x_axis)
+        abscissa, curves = (x, y) if along_x else (y, x)
+        for k, value in enumerate(curves):
+            values, crossed = (f[:, k], edge[:, k]) if along_x else (f[k, :], edge[k, :])
+            (line,) = ax.plot(abscissa, values, "o-", label=curve_axis[1].format(value))
+            ax.plot(abscissa[crossed], values[crossed], "x", color=line.get_color(), ms=9)
+        ax.set_xlabel(line_axis[0])
+        ax.set_ylabel("impact force F_s (N); x = edge contact")
+        ax.legend()
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def harris_map(torques_Nm, lte_peak_to_peak_um, labels=None, ax=None):
+    """Harris map: loaded TE peak-to-peak (um along the line of action) against pinion
+    torque (N·m), one curve per design (`lte_peak_to_peak_um[design][torque]`)."""
+    ax = _axes(ax)
+    curves = np.atleast_2d(np.asarray(lte_peak_to_peak_um, float))
+    for k, curve in enumerate(curves):
+        ax.plot(np.asarray(torques_Nm, float), curve, "o-", label=None if labels is None else labels[k])
+    ax.set_xlabel("pinion torque (N m)")
+    ax.set_ylabel("LTE peak-to-peak (um)")
+    if labels is not None:
+        ax.legend()
+    ax.grid(True, alpha=0.3)
+    return ax

@@ -3,6 +3,13 @@
 The unloaded contact (TCA) does not depend on the load, so a load sweep runs it once and
 maps the loaded stage over the torques with `vmap`; the compliance matrices, which do not
 depend on the load either, are not batched by `vmap` and are built once as well.
+
+The speed enters the impact only through the velocities (`gearjax.impact`): the
+first-contact search, the contact found and its local stiffness fit do not depend on it.
+An impact sweep `vmap`s the impact stage over the speeds inside the map over loads; what
+does not depend on the speed is not batched by `vmap`, so it is computed once per load
+and the speed axis costs only the closing formulas
+($v_n = \\omega_1 v_n^{(1)}$, $F_s = K_s^{1/(n+1)}((n+1) m v_n^2/2)^{n/(n+1)}$).
 """
 
 from __future__ import annotations
@@ -15,10 +22,12 @@ import numpy as np
 from ._custom_types import ArrayLike
 from ._numerics import as_float
 from ._validate import check_range
-from .impact import ImpactRegime
+from .impact import ImpactRegime, ImpactResult, impact_analysis
 from .ltca import LTCAResult, loaded_contact_analysis
-from .scene import Scene, _prepare, simulate
+from .operating import _MAX_SPEED
+from .scene import Scene, SimulationResult, _check_results, _prepare, simulate, stack_scenes
 from .tca import TCAResult, tooth_contact_analysis
+from .units import rad_per_s_to_rpm, rpm_to_rad_per_s
 
 
 class LoadSweep(eqx.Module):
@@ -38,15 +47,30 @@ class LoadSweep(eqx.Module):
         return self.ltca.torque / 1000.0
 
 
-def _one_of(engine_name: str, engine_value, usual_name: str, usual_value, unit: str, usual_unit: str):
+def _one_of(
+    engine_name: str, engine_value, usual_name: str, usual_value, unit: str, usual_unit: str, factor: float = 1000.0
+):
     """The argument given in exactly one of its two forms, as (name, value, unit, factor to
-    engine units)."""
+    engine units); `factor` converts the usual unit (default N·m to N·mm)."""
     if (engine_value is None) == (usual_value is None):
         got = "both" if engine_value is not None else "neither"
         raise ValueError(f"give exactly one of {engine_name} ({unit}) and {usual_name} ({usual_unit}); got {got}")
     if engine_value is not None:
         return engine_name, engine_value, unit, 1.0
-    return usual_name, usual_value, usual_unit, 1000.0
+    return usual_name, usual_value, usual_unit, factor
+
+
+def _axis(engine_name, engine_value, usual_name, usual_value, unit, usual_unit, *, factor, largest, what):
+    """A checked sweep axis in engine units: a non-empty 1-D array of finite values in
+    [0, largest] (engine units), given in exactly one of its two forms."""
+    name, values, given_unit, to_engine = _one_of(
+        engine_name, engine_value, usual_name, usual_value, unit, usual_unit, factor
+    )
+    shape = np.shape(values)
+    if len(shape) != 1 or shape[0] == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D array of {what} ({given_unit}); got shape {shape}")
+    check_range(name, values, 0.0, largest / to_engine, unit=given_unit)
+    return as_float(values) * to_engine
 
 
 def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: ArrayLike | None = None) -> LoadSweep:
@@ -64,12 +88,7 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
         `LoadSweep`: the scene's TCA once and the LTCA per torque (leading axis of `ltca`),
         in engine units (`ltca.torque` in N·mm).
     """
-    name, values, unit, factor = _one_of("torques", torques, "torques_Nm", torques_Nm, "N·mm", "N·m")
-    shape = np.shape(values)
-    if len(shape) != 1 or shape[0] == 0:
-        raise ValueError(f"{name} must be a non-empty 1-D array of pinion torques ({unit}); got shape {shape}")
-    check_range(name, values, 0.0, 1e12 / factor, unit=unit)
-    torques = as_float(values) * factor
+    torques = _torques(torques, torques_Nm)
     scene = _prepare(scene)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):
@@ -77,8 +96,17 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
     return _load_sweep(scene, torques)
 
 
+def _torques(torques, torques_Nm):
+    return _axis("torques", torques, "torques_Nm", torques_Nm, "N·mm", "N·m",
+                 factor=1000.0, largest=1e12, what="pinion torques")
+
+
 @eqx.filter_jit
 def _load_sweep(scene: Scene, torques) -> LoadSweep:
+    return _load_sweep_body(scene, torques)
+
+
+def _load_sweep_body(scene: Scene, torques) -> LoadSweep:
     pair = scene.pair.resolve()  # once, for the TCA and every load's LTCA
     tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
 
@@ -86,6 +114,199 @@ def _load_sweep(scene: Scene, torques) -> LoadSweep:
         return loaded_contact_analysis(pair, tca, torque, scene.contact_model)
 
     return LoadSweep(tca=tca, ltca=jax.vmap(one)(torques))
+
+
+class ImpactSweep(eqx.Module):
+    """Mesh-in impact over a torque × speed grid, in engine units.
+
+    Attributes:
+        tca: the unloaded contact, computed once.
+        ltca: the loaded contact per torque (leading axis); `ltca.torque` in N·mm.
+        impact: the impact per torque and speed (leading axes `[torque, speed]`): force
+            (N), velocity (mm/s), regime, strike point, stiffness fit, result code.
+        speed: the swept pinion speeds (rad/s).
+    """
+
+    tca: TCAResult
+    ltca: LTCAResult
+    impact: ImpactResult
+    speed: jax.Array
+
+    @property
+    def torques_Nm(self):
+        """The swept pinion torques in N·m."""
+        return self.ltca.torque / 1000.0
+
+    @property
+    def speeds_rpm(self):
+        """The swept pinion speeds in rev/min."""
+        return rad_per_s_to_rpm(self.speed)
+
+
+def impact_sweep(
+    scene: Scene,
+    torques: ArrayLike | None = None,
+    speeds: ArrayLike | None = None,
+    *,
+    torques_Nm: ArrayLike | None = None,
+    speeds_rpm: ArrayLike | None = None,
+    throw: bool = True,
+) -> ImpactSweep:
+    """Mesh-in impact of `scene` at every torque and speed of a grid, one compiled call.
+
+    TCA once; LTCA and the first-contact search once per torque (`vmap` over the torques);
+    the speed only scales the kinematics, so the impact's closing formulas are `vmap`ped
+    over the speeds without repeating the search or the stiffness fit (see the module
+    docstring). The scene's own operating point is ignored; its other settings apply.
+
+    Args:
+        scene: a scene with "impact" in its effects.
+        torques: pinion torques (N·mm), a non-empty 1-D array of finite values >= 0; or
+        torques_Nm: the same in N·m. Give exactly one.
+        speeds: pinion speeds (rad/s), a non-empty 1-D array of finite values >= 0; or
+        speeds_rpm: the same in rev/min ($\\omega = 2\\pi n/60$). Give exactly one.
+        throw: raise `SimulationError` if an LTCA or impact entry failed, naming how many
+            (as `simulate`); with False inspect `ltca.result` and `impact.result`.
+
+    Returns:
+        `ImpactSweep`, `impact` fields with leading axes `[torque, speed]`.
+    """
+    torques = _torques(torques, torques_Nm)
+    speeds = _axis("speeds", speeds, "speeds_rpm", speeds_rpm, "rad/s", "rpm",
+                   factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
+    if "impact" not in scene.effects:
+        raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
+    scene = _prepare(scene)
+    if scene.accuracy.dtype == "float32":
+        with jax.enable_x64(False):
+            sweep = _impact_sweep(scene, torques.astype("float32"), speeds.astype("float32"))
+    else:
+        sweep = _impact_sweep(scene, torques, speeds)
+    if throw:
+        _check_results(SimulationResult(tca=sweep.tca, ltca=sweep.ltca, impact=sweep.impact))
+    return sweep
+
+
+@eqx.filter_jit
+def _impact_sweep(scene: Scene, torques, speeds) -> ImpactSweep:
+    return _impact_sweep_body(scene, torques, speeds)
+
+
+def _impact_sweep_body(scene: Scene, torques, speeds) -> ImpactSweep:
+    pair = scene.pair.resolve()
+    tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+
+    def at_torque(torque):
+        ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
+
+        def at_speed(speed):
+            return impact_analysis(pair, scene.depth, tca, ltca, torque=torque, speed=speed,
+                                   model=scene.contact_model, pairs=scene.pairs, inertia=scene.inertia)
+
+        return ltca, jax.vmap(at_speed)(speeds)
+
+    ltca, impact = jax.vmap(at_torque)(torques)
+    return ImpactSweep(tca=tca, ltca=ltca, impact=impact, speed=speeds)
+
+
+class DesignSweep(eqx.Module):
+    """Loaded contact (and impact) of a batch of designs over a torque list (and speeds),
+    in engine units.
+
+    Attributes:
+        ltca: per design and torque (leading axes `[design, torque]`).
+        impact: per design, torque and speed (`[design, torque, speed]`), or None when no
+            speeds were given.
+        torque: the swept pinion torques (N·mm).
+        speed: the swept pinion speeds (rad/s), or None.
+    """
+
+    ltca: LTCAResult
+    impact: ImpactResult | None
+    torque: jax.Array
+    speed: jax.Array | None
+
+    @property
+    def torques_Nm(self):
+        """The swept pinion torques in N·m."""
+        return self.torque / 1000.0
+
+    @property
+    def speeds_rpm(self):
+        """The swept pinion speeds in rev/min (None without speeds)."""
+        return None if self.speed is None else rad_per_s_to_rpm(self.speed)
+
+
+def design_sweep(
+    scenes: list[Scene] | Scene,
+    torques: ArrayLike | None = None,
+    speeds: ArrayLike | None = None,
+    *,
+    torques_Nm: ArrayLike | None = None,
+    speeds_rpm: ArrayLike | None = None,
+    throw: bool = True,
+) -> DesignSweep:
+    """A batch of designs over a torque list (the Harris map: loaded TE peak-to-peak per
+    design and load) and, with speeds, their mesh-in impact (the regime map: surface or
+    edge contact and force per design and load), in one compiled call.
+
+    The designs run one after another inside the program (`lax.map`; on a CPU a `vmap` of
+    the solver loops would run every design to the slowest one's iteration count), each as
+    `load_sweep` / `impact_sweep` do: TCA once, the loads `vmap`ped, the speeds closing
+    formulas only.
+
+    Args:
+        scenes: scenes of one structure (e.g. the same pair with different modifications),
+            as a list (stacked with `stack_scenes`) or already stacked; their own operating
+            points are ignored.
+        torques / torques_Nm: pinion torques (N·mm / N·m), a non-empty 1-D array of finite
+            values >= 0; give exactly one.
+        speeds / speeds_rpm: pinion speeds (rad/s / rpm), optional; with them the scenes
+            need "impact" in their effects.
+        throw: raise `SimulationError` if an entry failed (as `simulate`).
+
+    Returns:
+        `DesignSweep` with leading axes `[design, torque(, speed)]`.
+    """
+    torques = _torques(torques, torques_Nm)
+    if speeds is None and speeds_rpm is None:
+        speeds = None
+    else:
+        speeds = _axis("speeds", speeds, "speeds_rpm", speeds_rpm, "rad/s", "rpm",
+                       factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
+    if isinstance(scenes, Scene):
+        stacked = scenes
+    else:
+        scenes = list(scenes)
+        if not all(isinstance(sc, Scene) for sc in scenes):
+            raise ValueError("scenes must be a list of Scene objects or a stacked Scene")
+        stacked = stack_scenes(scenes)
+    if speeds is not None and "impact" not in stacked.effects:
+        raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
+    stacked = _prepare(stacked)
+    if stacked.accuracy.dtype == "float32":
+        with jax.enable_x64(False):
+            sweep = _design_sweep(stacked, torques.astype("float32"), None if speeds is None else speeds.astype("float32"))
+    else:
+        sweep = _design_sweep(stacked, torques, speeds)
+    if throw:
+        _check_results(SimulationResult(tca=None, ltca=sweep.ltca, impact=sweep.impact))
+    return sweep
+
+
+@eqx.filter_jit
+def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
+    arrays, static = eqx.partition(stacked, eqx.is_array)
+
+    def one(design_arrays):
+        scene = eqx.combine(design_arrays, static)
+        if speeds is None:
+            return _load_sweep_body(scene, torques).ltca, None
+        sweep = _impact_sweep_body(scene, torques, speeds)
+        return sweep.ltca, sweep.impact
+
+    ltca, impact = jax.lax.map(one, arrays)
+    return DesignSweep(ltca=ltca, impact=impact, torque=torques, speed=speeds)
 
 
 def regime_transition(
