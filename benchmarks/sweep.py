@@ -1,0 +1,68 @@
+"""Throughput of the batched sweeps (issue #13): how the cost grows with loads, speeds and
+designs.
+
+    python benchmarks/sweep.py [--accuracy fast] [--repeats 3]
+
+Seed 001 pair, paper optimum. Each row is one compiled call (compile time apart, median of
+the repeats): `impact_sweep` over 1 … 64 loads at one speed, 16 loads at 1 … 16 speeds,
+and `design_sweep` of 1 … 16 designs at 4 loads and one speed. Writes
+benchmarks/results/sweep.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import equinox as eqx  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+from _common import machine, time_compiled_output, write  # noqa: E402
+
+import gearjax as gj  # noqa: E402
+from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
+from gearjax.scene import _prepare  # noqa: E402
+from gearjax.sweep import _design_sweep, _impact_sweep  # noqa: E402
+from gearjax.units import rpm_to_rad_per_s  # noqa: E402
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--accuracy", default="fast")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    scene = _prepare(gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+                              effects=("impact",), accuracy=args.accuracy))
+    rows = []
+
+    def grid(loads, speeds):
+        return jnp.linspace(2.0e5, 1.6e6, loads), rpm_to_rad_per_s(jnp.linspace(1000.0, 6000.0, speeds))
+
+    def row(case, fn, fn_args, designs, loads, speeds):
+        compile_s, run_s, runs, out = time_compiled_output(fn, *fn_args, repeats=args.repeats)
+        finite = bool(np.all(np.isfinite(np.asarray(out.impact.force))))
+        entry = {"case": case, "designs": designs, "loads": loads, "speeds": speeds, "compile_s": compile_s,
+                 "run_s": run_s, "runs_s": runs, "load_cases_per_s": designs * loads / run_s,
+                 "impact_points_per_s": designs * loads * speeds / run_s, "all_finite": finite}
+        rows.append(entry)
+        print(f"{case:14s} designs {designs:3d} loads {loads:3d} speeds {speeds:3d}  compile {compile_s:6.1f} s  "
+              f"run {run_s * 1e3:9.1f} ms  {entry['load_cases_per_s']:8.1f} load cases/s  "
+              f"{entry['impact_points_per_s']:9.1f} impact points/s", flush=True)
+
+    for loads in (1, 4, 16, 64):
+        row("impact_sweep", _impact_sweep, (scene, *grid(loads, 1)), 1, loads, 1)
+    for speeds in (4, 16):
+        row("impact_sweep", _impact_sweep, (scene, *grid(16, speeds)), 1, 16, speeds)
+    for designs in (1, 4, 16):
+        scales = np.linspace(0.0, 3.0, designs)
+        stacked = gj.stack_scenes([eqx.tree_at(lambda s: s.modification.root_relief, scene,
+                                               scene.modification.root_relief * float(k)) for k in scales])
+        row("design_sweep", _design_sweep, (stacked, *grid(4, 1)), designs, 4, 1)
+    write("sweep", {"machine": machine(), "accuracy": args.accuracy, "rows": rows})
+
+
+if __name__ == "__main__":
+    main()
