@@ -2,11 +2,14 @@
 designs.
 
     python benchmarks/sweep.py [--accuracy fast] [--repeats 3]
+    XLA_FLAGS=--xla_force_host_platform_device_count=2 python benchmarks/sweep.py --sharded
 
 Seed 001 pair, paper optimum. Each row is one compiled call (compile time apart, median of
 the repeats): `impact_sweep` over 1 … 64 loads at one speed, 16 loads at 1 … 16 speeds,
 and `design_sweep` of 1 … 16 designs at 4 loads and one speed. Writes
-benchmarks/results/sweep.json.
+benchmarks/results/sweep.json. With `--sharded`: 16 loads and 16 designs on one device and
+sharded over all devices (`devices="all"`, the public API, compilation included in a first
+call that is not timed), written to benchmarks/results/sweep_sharded.json.
 """
 
 from __future__ import annotations
@@ -33,7 +36,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--accuracy", default="fast")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--sharded", action="store_true", help="one device vs all devices")
     args = parser.parse_args()
+    if args.sharded:
+        return sharded(args)
     scene = _prepare(gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
                               effects=("impact",), accuracy=args.accuracy))
     rows = []
@@ -62,6 +68,37 @@ def main() -> None:
                                                scene.modification.root_relief * float(k)) for k in scales])
         row("design_sweep", _design_sweep, (stacked, *grid(4, 1)), designs, 4, 1)
     write("sweep", {"machine": machine(), "accuracy": args.accuracy, "rows": rows})
+
+
+def sharded(args) -> None:
+    """Median run time of `impact_sweep` (16 loads) and `design_sweep` (16 designs, 4 loads)
+    through the public API on the default device and sharded over `jax.devices()`."""
+    import statistics
+    import time
+
+    scene = gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+                     effects=("impact",), accuracy=args.accuracy)
+    designs = [eqx.tree_at(lambda s: s.modification.root_relief, scene, scene.modification.root_relief * float(k))
+               for k in np.linspace(0.0, 3.0, 16)]
+    calls = {
+        "impact_sweep 16 loads": lambda devices: gj.impact_sweep(
+            scene, torques_Nm=np.linspace(200.0, 1600.0, 16), speeds_rpm=[5000.0], devices=devices).impact.force,
+        "design_sweep 16 designs x 4 loads": lambda devices: gj.design_sweep(
+            designs, torques_Nm=[400.0, 800.0, 1200.0, 1600.0], speeds_rpm=[5000.0], devices=devices).impact.force,
+    }
+    rows = []
+    for name, call in calls.items():
+        for devices in (None, "all"):
+            jax.block_until_ready(call(devices))
+            runs = []
+            for _ in range(args.repeats):
+                t0 = time.perf_counter()
+                jax.block_until_ready(call(devices))
+                runs.append(time.perf_counter() - t0)
+            count = 1 if devices is None else jax.device_count()
+            rows.append({"case": name, "devices": count, "run_s": statistics.median(runs), "runs_s": runs})
+            print(f"{name:36s} devices {count}  run {statistics.median(runs) * 1e3:8.1f} ms", flush=True)
+    write("sweep_sharded", {"machine": machine(), "accuracy": args.accuracy, "rows": rows})
 
 
 if __name__ == "__main__":

@@ -151,6 +151,7 @@ def impact_sweep(
     torques_Nm: ArrayLike | None = None,
     speeds_rpm: ArrayLike | None = None,
     throw: bool = True,
+    devices=None,
 ) -> ImpactSweep:
     """Mesh-in impact of `scene` at every torque and speed of a grid, one compiled call.
 
@@ -167,6 +168,8 @@ def impact_sweep(
         speeds_rpm: the same in rev/min ($\\omega = 2\\pi n/60$). Give exactly one.
         throw: raise `SimulationError` if an LTCA or impact entry failed, naming how many
             (as `simulate`); with False inspect `ltca.result` and `impact.result`.
+        devices: shard the torque axis over these devices (`"all"` for `jax.devices()`);
+            None (default) runs on the default device. See `shard_batch`.
 
     Returns:
         `ImpactSweep`, `impact` fields with leading axes `[torque, speed]`.
@@ -176,12 +179,17 @@ def impact_sweep(
                    factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
     if "impact" not in scene.effects:
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
+    devices = _devices(devices)
     scene = _prepare(scene)
-    if scene.accuracy.dtype == "float32":
-        with jax.enable_x64(False):
-            sweep = _impact_sweep(scene, torques.astype("float32"), speeds.astype("float32"))
-    else:
+    count = torques.shape[0]
+    with _precision(scene):
+        dtype = jnp.result_type(float)
+        torques, speeds = torques.astype(dtype), speeds.astype(dtype)
+        if devices is not None:
+            torques = shard_batch(torques, devices)
         sweep = _impact_sweep(scene, torques, speeds)
+    if devices is not None:
+        sweep = eqx.tree_at(lambda s: (s.ltca, s.impact), sweep, _rows(count, (sweep.ltca, sweep.impact)))
     if throw:
         _check_results(SimulationResult(tca=sweep.tca, ltca=sweep.ltca, impact=sweep.impact))
     return sweep
@@ -245,6 +253,7 @@ def design_sweep(
     torques_Nm: ArrayLike | None = None,
     speeds_rpm: ArrayLike | None = None,
     throw: bool = True,
+    devices=None,
 ) -> DesignSweep:
     """A batch of designs over a torque list (the Harris map: loaded TE peak-to-peak per
     design and load) and, with speeds, their mesh-in impact (the regime map: surface or
@@ -264,6 +273,9 @@ def design_sweep(
         speeds / speeds_rpm: pinion speeds (rad/s / rpm), optional; with them the scenes
             need "impact" in their effects.
         throw: raise `SimulationError` if an entry failed (as `simulate`).
+        devices: shard the design axis over these devices (`"all"` for `jax.devices()`):
+            each device runs its share of the designs one after another. None (default)
+            runs on the default device. See `shard_batch`.
 
     Returns:
         `DesignSweep` with leading axes `[design, torque(, speed)]`.
@@ -283,21 +295,32 @@ def design_sweep(
         stacked = stack_scenes(scenes)
     if speeds is not None and "impact" not in stacked.effects:
         raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
+    devices = _devices(devices)
     stacked = _prepare(stacked)
-    if stacked.accuracy.dtype == "float32":
-        with jax.enable_x64(False):
-            sweep = _design_sweep(stacked, torques.astype("float32"), None if speeds is None else speeds.astype("float32"))
-    else:
-        sweep = _design_sweep(stacked, torques, speeds)
+    arrays, static = eqx.partition(stacked, eqx.is_array)
+    count = jax.tree_util.tree_leaves(arrays)[0].shape[0]
+    with _precision(stacked):
+        dtype = jnp.result_type(float)
+        torques = torques.astype(dtype)
+        speeds = None if speeds is None else speeds.astype(dtype)
+        if devices is None:
+            ltca, impact = _design_rows(arrays, static, torques, speeds)
+        else:
+            # One row of designs per device: the rows are vmapped (and so sharded), each
+            # device runs its designs one after another.
+            per_device = -(-count // len(devices))
+            blocks = jax.tree_util.tree_map(
+                lambda a: shard_batch(_pad(a, per_device * len(devices)).reshape(len(devices), per_device, *a.shape[1:]),
+                                      devices), arrays)
+            ltca, impact = _design_blocks(blocks, static, torques, speeds)
+            ltca, impact = _rows(count, jax.tree_util.tree_map(lambda a: a.reshape(-1, *a.shape[2:]), (ltca, impact)))
+    sweep = DesignSweep(ltca=ltca, impact=impact, torque=torques, speed=speeds)
     if throw:
         _check_results(SimulationResult(tca=None, ltca=sweep.ltca, impact=sweep.impact))
     return sweep
 
 
-@eqx.filter_jit
-def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
-    arrays, static = eqx.partition(stacked, eqx.is_array)
-
+def _design_rows_body(arrays, static, torques, speeds):
     def one(design_arrays):
         scene = eqx.combine(design_arrays, static)
         if speeds is None:
@@ -305,8 +328,76 @@ def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
         sweep = _impact_sweep_body(scene, torques, speeds)
         return sweep.ltca, sweep.impact
 
-    ltca, impact = jax.lax.map(one, arrays)
+    return jax.lax.map(one, arrays)
+
+
+@eqx.filter_jit
+def _design_rows(arrays, static, torques, speeds):
+    """(ltca, impact) of the designs (leading axis of `arrays`), one after another."""
+    return _design_rows_body(arrays, static, torques, speeds)
+
+
+@eqx.filter_jit
+def _design_blocks(blocks, static, torques, speeds):
+    """`_design_rows` of each block of designs (leading axis, sharded), the blocks vmapped."""
+    return jax.vmap(lambda b: _design_rows_body(b, static, torques, speeds))(blocks)
+
+
+@eqx.filter_jit
+def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
+    """The unsharded design sweep of a prepared, stacked scene, as one jitted function
+    (benchmarks time its compilation and run)."""
+    arrays, static = eqx.partition(stacked, eqx.is_array)
+    ltca, impact = _design_rows_body(arrays, static, torques, speeds)
     return DesignSweep(ltca=ltca, impact=impact, torque=torques, speed=speeds)
+
+
+def shard_batch(values, devices):
+    """`values` with its leading (batch) axis split over `devices`: a one-axis `Mesh`
+    ("batch") and `NamedSharding(mesh, P("batch"))`, so a jitted sweep runs each device's
+    share of the batch there (GSPMD partitions the program; no scheduler of ours). The
+    leading axis is padded to a multiple of the device count by repeating its last entry;
+    the sweeps drop the padded rows from their results.
+
+    On several hosts, start one process per host with `jax.distributed.initialize()` and
+    pass `jax.devices()` (all hosts' devices): the same code then shards across hosts."""
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    mesh = Mesh(np.asarray(devices), ("batch",))
+    padded = _pad(jnp.asarray(values), -(-values.shape[0] // len(devices)) * len(devices))
+    return jax.device_put(padded, NamedSharding(mesh, PartitionSpec("batch")))
+
+
+def _pad(a, length: int):
+    """`a` with its leading axis padded to `length` by repeating the last entry."""
+    extra = length - a.shape[0]
+    return a if extra == 0 else jnp.concatenate([a, jnp.repeat(a[-1:], extra, axis=0)])
+
+
+def _rows(count: int, tree):
+    """The first `count` entries of every array's leading axis (drops padded rows)."""
+    return jax.tree_util.tree_map(lambda a: a[:count], tree)
+
+
+def _devices(devices):
+    """None, or the list of devices to shard over ("all": `jax.devices()`)."""
+    if devices is None:
+        return None
+    if isinstance(devices, str):
+        if devices != "all":
+            raise ValueError(f"devices must be None, 'all' or a list of jax devices; got {devices!r}")
+        return jax.devices()
+    devices = list(devices)
+    if not devices or not all(isinstance(d, jax.Device) for d in devices):
+        raise ValueError(f"devices must be None, 'all' or a non-empty list of jax devices; got {devices!r}")
+    return devices
+
+
+def _precision(scene: Scene):
+    """64-bit types off while a float32 scene is traced (as `simulate`)."""
+    import contextlib
+
+    return jax.enable_x64(False) if scene.accuracy.dtype == "float32" else contextlib.nullcontext()
 
 
 def regime_transition(
