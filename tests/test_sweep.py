@@ -2,8 +2,6 @@
 runs, the speed law, units and argument checks."""
 
 import json
-import subprocess
-import sys
 
 import equinox as eqx
 import numpy as np
@@ -12,9 +10,9 @@ import pytest
 import gearjax.sweep
 from gearjax import Accuracy, OperatingPoint, Scene, simulate
 from gearjax.cli import main
+from gearjax.impact import ImpactRegime
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.scene_file import DEFAULT_SCENE_TOML, parse_scene
-from gearjax.impact import ImpactRegime
 from gearjax.sweep import design_sweep, impact_sweep, load_sweep, regime_transition
 
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)
@@ -116,47 +114,6 @@ def test_cli_sweep_writes_the_grid_as_json_npz_and_plots(impact_grid, tmp_path, 
     np.testing.assert_array_equal(arrays["impact_force_N"], np.asarray(written["impact_force_N"]))
     for name in ("sweep_force_map.png", "sweep_harris.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-
-
-SHARDED = """
-import os
-os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=4"
-import json, jax
-jax.config.update("jax_enable_x64", True)
-import equinox as eqx, numpy as np
-from gearjax.scene_file import DEFAULT_SCENE_TOML, parse_scene
-from gearjax.sweep import design_sweep, impact_sweep
-from gearjax._solution import enum_name
-scene, _ = parse_scene(DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"'))
-t, n = [300.0, 700.0, 1600.0], [2500.0, 5000.0]
-one = impact_sweep(scene, torques_Nm=t, speeds_rpm=n)
-four = impact_sweep(scene, torques_Nm=t, speeds_rpm=n, devices="all")
-designs = [eqx.tree_at(lambda s: s.modification.root_relief, scene, f * scene.modification.root_relief) for f in (0.0, 1.0, 3.0)]
-rows = design_sweep(designs, torques_Nm=t[:2])
-split = design_sweep(designs, torques_Nm=t[:2], devices=jax.devices()[:2])
-print(json.dumps({"devices": jax.device_count(),
-                  "force": [np.asarray(one.impact.force).tolist(), np.asarray(four.impact.force).tolist()],
-                  "regime": [enum_name(one.impact.regime).tolist(), enum_name(four.impact.regime).tolist()],
-                  "lte": [np.asarray(rows.ltca.lte_peak_to_peak_line).tolist(), np.asarray(split.ltca.lte_peak_to_peak_line).tolist()]}))
-"""
-
-
-def test_sharded_sweeps_equal_one_device():
-    """On 4 (forced) CPU devices in a subprocess: the torque axis of `impact_sweep` (3
-    torques, padded to 4) and the design axis of `design_sweep` (3 designs on 2 devices)
-    sharded give the one-device results (1e-9; the partitioned programs round differently)
-    with the padding dropped."""
-    out = subprocess.run([sys.executable, "-c", SHARDED], capture_output=True, text=True, timeout=900)
-    assert out.returncode == 0, out.stderr[-3000:]
-    got = json.loads(out.stdout.strip().splitlines()[-1])
-    assert got["devices"] == 4
-    one, four = (np.asarray(f) for f in got["force"])
-    assert one.shape == four.shape == (3, 2)
-    np.testing.assert_allclose(four, one, rtol=1e-9)
-    assert got["regime"][0] == got["regime"][1]
-    rows, split = (np.asarray(v) for v in got["lte"])
-    assert rows.shape == split.shape == (3, 2)
-    np.testing.assert_allclose(split, rows, rtol=1e-9)
 
 
 @pytest.mark.parametrize("devices", ["gpu0", [], [0, 1]])
