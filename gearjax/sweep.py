@@ -169,7 +169,8 @@ def impact_sweep(
         throw: raise `SimulationError` if an LTCA or impact entry failed, naming how many
             (as `simulate`); with False inspect `ltca.result` and `impact.result`.
         devices: shard the torque axis over these devices (`"all"` for `jax.devices()`);
-            None (default) runs on the default device. See `shard_batch`.
+            None (default) runs on the default device. See `shard_batch`. Experimental:
+            on forced CPU host devices jaxlib 0.10.2's runtime has hung (README, "Sweeps").
 
     Returns:
         `ImpactSweep`, `impact` fields with leading axes `[torque, speed]`.
@@ -275,7 +276,8 @@ def design_sweep(
         throw: raise `SimulationError` if an entry failed (as `simulate`).
         devices: shard the design axis over these devices (`"all"` for `jax.devices()`):
             each device runs its share of the designs one after another. None (default)
-            runs on the default device. See `shard_batch`.
+            runs on the default device. See `shard_batch`; experimental, as for
+            `impact_sweep`.
 
     Returns:
         `DesignSweep` with leading axes `[design, torque(, speed)]`.
