@@ -3,7 +3,8 @@
     gearjax run [SCENE.toml] [--json] [--no-cache]
     gearjax reproduce curvilinear|dca [--json] [--cross-check] [--no-cache]
     gearjax optimize [SCENE.toml] [--method ga|gradient] [--out DIR] [--resume] [--json] [--quiet]
-    gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--out DIR] [--json] [--plot]
+    gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--chunk N] [--out DIR] [--resume]
+                  [--json] [--plot] [--quiet]
 
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
@@ -118,7 +119,8 @@ def _optimize(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from .sweep_command import run_command
 
-    return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot)
+    return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot,
+                       chunk=args.chunk, resume=args.resume, quiet=args.quiet)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -147,9 +149,12 @@ def main(argv: list[str] | None = None) -> int:
                      help="pinion torques (N m): 100,400,1000 or start:stop:count")
     swp.add_argument("--speed-rpm", required=True, dest="speed_rpm",
                      help="pinion speeds (rpm): 1000,5000 or start:stop:count")
-    swp.add_argument("--out", help="directory for sweep.json and sweep.npz (and the plots)")
+    swp.add_argument("--chunk", type=int, help="torques per chunk (default: all at once); each chunk is written when done")
+    swp.add_argument("--out", help="run directory: each finished chunk, then sweep.json and sweep.npz (and the plots)")
+    swp.add_argument("--resume", action="store_true", help="continue the killed or finished run in --out")
     swp.add_argument("--json", action="store_true", help="print one JSON object")
     swp.add_argument("--plot", action="store_true", help="also write sweep_force_map.png and sweep_harris.png (needs --out)")
+    swp.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
     for command in (run, rep, opt, swp):
         command.add_argument(
             "--no-cache", action="store_true",

@@ -21,11 +21,12 @@ import numpy as np
 
 from ._custom_types import ArrayLike
 from ._numerics import as_float
+from ._solution import RESULTS, SimulationError, enum_name
 from ._validate import check_range
 from .impact import ImpactRegime, ImpactResult, impact_analysis
 from .ltca import LTCAResult, loaded_contact_analysis
 from .operating import _MAX_SPEED
-from .scene import Scene, SimulationResult, _check_results, _prepare, simulate, stack_scenes
+from .scene import Scene, SimulationResult, _check_results, _prepare, stack_scenes
 from .tca import TCAResult, tooth_contact_analysis
 from .units import rad_per_s_to_rpm, rpm_to_rad_per_s
 
@@ -99,6 +100,11 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
 def _torques(torques, torques_Nm):
     return _axis("torques", torques, "torques_Nm", torques_Nm, "N·mm", "N·m",
                  factor=1000.0, largest=1e12, what="pinion torques")
+
+
+def _speeds(speeds, speeds_rpm):
+    return _axis("speeds", speeds, "speeds_rpm", speeds_rpm, "rad/s", "rpm",
+                 factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
 
 
 @eqx.filter_jit
@@ -176,8 +182,7 @@ def impact_sweep(
         `ImpactSweep`, `impact` fields with leading axes `[torque, speed]`.
     """
     torques = _torques(torques, torques_Nm)
-    speeds = _axis("speeds", speeds, "speeds_rpm", speeds_rpm, "rad/s", "rpm",
-                   factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
+    speeds = _speeds(speeds, speeds_rpm)
     if "impact" not in scene.effects:
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
@@ -209,8 +214,7 @@ def _impact_sweep_body(scene: Scene, torques, speeds) -> ImpactSweep:
         ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
 
         def at_speed(speed):
-            return impact_analysis(pair, scene.depth, tca, ltca, torque=torque, speed=speed,
-                                   model=scene.contact_model, pairs=scene.pairs, inertia=scene.inertia)
+            return _impact(scene, pair, tca, ltca, torque, speed)
 
         return ltca, jax.vmap(at_speed)(speeds)
 
@@ -286,8 +290,7 @@ def design_sweep(
     if speeds is None and speeds_rpm is None:
         speeds = None
     else:
-        speeds = _axis("speeds", speeds, "speeds_rpm", speeds_rpm, "rad/s", "rpm",
-                       factor=float(rpm_to_rad_per_s(1.0)), largest=_MAX_SPEED, what="pinion speeds")
+        speeds = _speeds(speeds, speeds_rpm)
     if isinstance(scenes, Scene):
         stacked = scenes
     else:
@@ -403,31 +406,44 @@ def _precision(scene: Scene):
 
 
 def regime_transition(
-    scene: Scene,
+    scene: Scene | list[Scene],
     low: float | None = None,
     high: float | None = None,
     *,
     low_Nm: float | None = None,
     high_Nm: float | None = None,
     tolerance: float = 1e-3,
-) -> tuple[float, float]:
-    """Torque bracket of the switch from surface to edge mesh-in contact.
+    throw: bool = True,
+):
+    """Torque bracket of the switch from surface to edge mesh-in contact, for one scene or
+    a batch of designs in one compiled call.
 
     Bisection on the impact regime between the torques `low` (surface) and `high` (edge),
-    each step a `simulate` of the same compiled program, until the bracket is narrower than
-    `tolerance` times `high`. The transition load is where the loaded approach of the
-    pairs in mesh closes the modification's clearance exactly at the gear's tip edge
+    until the bracket is narrower than `tolerance` times its upper end. The whole search is
+    one program: TCA once per design (it does not depend on the load), then a
+    `lax.while_loop` whose steps are one LTCA and one impact analysis at a torque (the
+    first two steps check the ends, then the midpoints); a batch of designs runs the
+    designs' searches one after another inside the program (`lax.map`, as `design_sweep`),
+    each stopping at its own tolerance. The transition load is where the loaded approach of
+    the pairs in mesh closes the modification's clearance exactly at the gear's tip edge
     (seed 001: TE = LTE at the start of engagement).
 
     Args:
-        scene: a scene with `"impact"` in its effects; its own torque is ignored.
+        scene: a scene with `"impact"` in its effects (its own torque is ignored), or a
+            list of such scenes of one structure (designs, stacked with `stack_scenes`).
         low, high: pinion torques (N·mm), finite, $0 \\le$ low < high; or
         low_Nm, high_Nm: the same in N·m. Give each bound once, in either form.
         tolerance: relative width of the returned bracket, in (0, 1).
+        throw: raise `SimulationError` if an LTCA or impact solve of the search failed;
+            with False such a search returns NaN.
 
     Returns:
-        `(below, above)` in N·mm (engine units, whichever form the bounds were given in):
-        the largest torque found with surface contact and the smallest with edge contact.
+        For one scene, `(below, above)` in N·mm (engine units, whichever form the bounds
+        were given in): the largest torque found with surface contact and the smallest
+        with edge contact; a `ValueError` if `low` is not surface or `high` not edge
+        contact. For a list, `(below, above)` as arrays over the designs, NaN for a design
+        whose regime does not switch between `low` and `high` (or whose search failed,
+        with `throw=False`).
     """
     bounds = {}
     for key, engine, usual in (("low", low, low_Nm), ("high", high, high_Nm)):
@@ -440,23 +456,84 @@ def regime_transition(
     if not low < high:
         raise ValueError(f"{low_name} must be below {high_name}; got {low} and {high} N·mm")
     check_range("tolerance", tolerance, 0.0, 1.0, low_inclusive=False, high_inclusive=False)
-    if "impact" not in scene.effects:
+    single = isinstance(scene, Scene)
+    scenes = [scene] if single else list(scene)
+    if not scenes or not all(isinstance(sc, Scene) for sc in scenes):
+        raise ValueError("scene must be a Scene or a non-empty list of Scene objects")
+    if any("impact" not in sc.effects for sc in scenes):
         raise ValueError("regime_transition needs a scene with effects including 'impact'")
-
-    def regime(torque: float) -> int:
-        s = eqx.tree_at(lambda sc: sc.operating.torque, scene, jnp.asarray(torque, jnp.result_type(float)))
-        return int(simulate(s).impact.regime == ImpactRegime.edge)
-
-    at_low, at_high = regime(low), regime(high)
-    if at_low != 0 or at_high != 1:
-        raise ValueError(
-            f"regime_transition needs surface contact at {low_name} = {low_given:g} {low_unit} and edge "
-            f"contact at {high_name} = {high_given:g} {high_unit}; got {at_low} and {at_high} (0 surface, 1 edge)"
+    stacked = _prepare(stack_scenes(scenes))
+    arrays, static = eqx.partition(stacked, eqx.is_array)
+    with _precision(stacked):
+        dtype = jnp.result_type(float)
+        search = _transition(arrays, static, jnp.asarray(low, dtype), jnp.asarray(high, dtype),
+                             jnp.asarray(tolerance, dtype))
+    below, above, edge_low, edge_high, ltca_code, impact_code = search
+    below, above, edge_low, edge_high = (np.asarray(a) for a in (below, above, edge_low, edge_high))
+    ltca_failed, impact_failed = (np.asarray(c != RESULTS.successful) for c in (ltca_code, impact_code))
+    failed = ltca_failed | impact_failed
+    if throw and failed.any():
+        stage, codes, bad = ("ltca", ltca_code, ltca_failed) if ltca_failed.any() else ("impact", impact_code, impact_failed)
+        names = sorted(set(np.asarray(enum_name(codes))[bad].tolist()))
+        raise SimulationError(
+            stage, codes,
+            f"regime_transition: the {stage.upper()} stage failed in the search of {int(failed.sum())} of "
+            f"{failed.size} designs ({', '.join(names)}). Pass throw=False to get NaN for those designs.",
         )
-    while high - low > tolerance * high:
-        mid = 0.5 * (low + high)
-        if regime(mid) == 0:
-            low = mid
-        else:
-            high = mid
-    return low, high
+    if single:
+        if edge_low[0] or not edge_high[0]:
+            raise ValueError(
+                f"regime_transition needs surface contact at {low_name} = {low_given:g} {low_unit} and edge "
+                f"contact at {high_name} = {high_given:g} {high_unit}; got {int(edge_low[0])} and "
+                f"{int(edge_high[0])} (0 surface, 1 edge)"
+            )
+        return float(below[0]), float(above[0])
+    found = ~edge_low & edge_high & ~failed
+    return np.where(found, below, np.nan), np.where(found, above, np.nan)
+
+
+def _impact(scene: Scene, pair, tca, ltca, torque, speed) -> ImpactResult:
+    """The impact stage of a resolved pair at one torque and speed (as `simulate`)."""
+    return impact_analysis(pair, scene.depth, tca, ltca, torque=torque, speed=speed,
+                           model=scene.contact_model, pairs=scene.pairs, inertia=scene.inertia)
+
+
+#: Most steps of one bisection (the two end checks included); 2^-62 of the first bracket.
+_MAX_BISECTION_STEPS = 64
+
+
+@eqx.filter_jit
+def _transition(arrays, static, low, high, tolerance):
+    """The bisection of `regime_transition` for each design (leading axis of `arrays`):
+    below, above, regime at low and high is edge, and the first failed LTCA and impact
+    result codes (successful when none failed)."""
+
+    def one(design_arrays):
+        scene = eqx.combine(design_arrays, static)
+        pair = scene.pair.resolve()
+        tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+        def running(c):
+            step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
+            sound = (ltca_code == RESULTS.successful) & (impact_code == RESULTS.successful)
+            bracket = ~edge_lo & edge_hi & (hi - lo > tolerance * hi)
+            return sound & ((step < 2) | bracket) & (step < _MAX_BISECTION_STEPS)
+
+        def bisect(c):
+            step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
+            torque = jnp.where(step == 0, low, jnp.where(step == 1, high, 0.5 * (lo + hi)))
+            ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
+            impact = _impact(scene, pair, tca, ltca, torque, scene.operating.speed)
+            edge = impact.regime == ImpactRegime.edge
+            middle = step >= 2
+            lo = jnp.where(middle & ~edge, torque, lo)
+            hi = jnp.where(middle & edge, torque, hi)
+            edge_lo = jnp.where(step == 0, edge, edge_lo)
+            edge_hi = jnp.where(step == 1, edge, edge_hi)
+            return step + 1, lo, hi, edge_lo, edge_hi, ltca.result, impact.result
+
+        ok = RESULTS.where(jnp.asarray(True), RESULTS.successful, RESULTS.successful)
+        start = (jnp.asarray(0), low, high, jnp.asarray(False), jnp.asarray(True), ok, ok)
+        _, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = jax.lax.while_loop(running, bisect, start)
+        return lo, hi, edge_lo, edge_hi, ltca_code, impact_code
+
+    return jax.lax.map(one, arrays)

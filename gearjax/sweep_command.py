@@ -1,7 +1,9 @@
-"""`gearjax sweep`: the mesh-in impact over a torque × speed grid (`gearjax.sweep.impact_sweep`),
-written as `sweep.json` and `sweep.npz`, optionally plotted.
+"""`gearjax sweep`: the mesh-in impact over a torque × speed grid (`gearjax.sweep.impact_sweep`,
+in chunks of torques by `gearjax.sweep_run.run_impact_sweep`), written as `sweep.json` and
+`sweep.npz`, optionally plotted; a killed run continues with `--resume`.
 
-    gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--out DIR] [--json] [--plot]
+    gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--chunk N] [--out DIR]
+                  [--resume] [--json] [--plot] [--quiet]
 
 A LIST is comma-separated numbers (`100,400,1000`) or `start:stop:count` (`count` evenly
 spaced values from `start` to `stop`, both included).
@@ -12,7 +14,6 @@ from __future__ import annotations
 import json
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -61,64 +62,36 @@ def _number(option: str, text: str) -> float:
     return value
 
 
-def run_command(scene_path: str | None, torque: str, speed: str, out: str | None, as_json: bool, plot: bool) -> int:
+def run_command(scene_path: str | None, torque: str, speed: str, out: str | None, as_json: bool, plot: bool,
+                chunk: int | None = None, resume: bool = False, quiet: bool = False) -> int:
     from .scene_file import SceneFileError, default_scene, load_scene
 
     try:
         torques_Nm = parse_list("--torque-Nm", torque)
         speeds_rpm = parse_list("--speed-rpm", speed)
+        if chunk is not None and chunk < 1:
+            raise ListError(f"--chunk: the torques per chunk must be an integer >= 1; got {chunk}")
+        if resume and out is None:
+            raise ListError("--resume: give the run directory with --out")
         scene, _ = default_scene() if scene_path is None else load_scene(scene_path)
         if "impact" not in scene.effects:
             raise SceneFileError("analysis.effects: the sweep needs effects = [\"impact\"] in the scene file")
     except (ListError, SceneFileError) as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
-    from .sweep import impact_sweep
+    from .rundir import RunDirectoryError
+    from .sweep_run import run_impact_sweep
 
-    start = time.perf_counter()
-    sweep = impact_sweep(scene, torques_Nm=torques_Nm, speeds_rpm=speeds_rpm, throw=False)
-    report = sweep_dict(scene, sweep, time.perf_counter() - start)
-    files = []
-    if out is not None:
-        directory = Path(out)
-        directory.mkdir(parents=True, exist_ok=True)
-        (directory / "sweep.json").write_text(json.dumps({"sweep": report}, indent=2))
-        np.savez(directory / "sweep.npz", **{k: np.asarray(v) for k, v in report.items() if isinstance(v, list)})
-        files += [str(directory / "sweep.json"), str(directory / "sweep.npz")]
-        if plot:
-            files += write_plots(report, directory)
-    report["files"] = files
+    progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
+    try:
+        report = run_impact_sweep(scene, torques_Nm, speeds_rpm, chunk=chunk, out=out, resume=resume, progress=progress)
+    except RunDirectoryError as err:  # the directory holds another sweep, or --resume is missing
+        print(f"gearjax: error: {err}", file=sys.stderr)
+        return 2
+    if out is not None and plot:
+        report["files"] += write_plots(report, Path(out))
     print(json.dumps({"sweep": report}, indent=2) if as_json else summary(report))
     return 0
-
-
-def sweep_dict(scene, sweep, wall_time_s: float) -> dict:
-    """The sweep in the usual units (keys in the README); nested lists are [torque][speed]."""
-    from ._solution import RESULTS, enum_name
-    from .optimize.command import _accuracy_name
-
-    imp, ltca = sweep.impact, sweep.ltca
-    rb2 = float(np.asarray(ltca.action_radius).reshape(-1, 2)[0, 1])
-    lte = np.asarray(ltca.transmission_error)
-    return {
-        "torque_Nm": np.asarray(sweep.torques_Nm).tolist(),
-        "speed_rpm": np.asarray(sweep.speeds_rpm).tolist(),
-        "impact_force_N": np.asarray(imp.force).tolist(),
-        "impact_velocity_mm_per_s": np.asarray(imp.velocity).tolist(),
-        "impact_regime": np.asarray(enum_name(imp.regime)).tolist(),
-        "impact_contact_kind": np.asarray(enum_name(imp.kind)).tolist(),
-        "impact_pinion_roll_length_mm": np.asarray(imp.pinion_parameter).tolist(),
-        "impact_face_position_mm": np.asarray(imp.slice_z).tolist(),
-        "impact_pinion_angle_deg": np.degrees(np.asarray(imp.pinion_angle)).tolist(),
-        "impact_converged": np.asarray(imp.result == RESULTS.successful).tolist(),
-        "impact_result": np.asarray(enum_name(imp.result)).tolist(),
-        "stiffness_exponent": np.asarray(imp.stiffness.exponent)[:, 0].tolist(),
-        "lte_peak_to_peak_um": (np.asarray(ltca.lte_peak_to_peak_line) * 1e3).tolist(),
-        "lte_mean_um": (lte.mean(axis=-1) * rb2 * 1e3).tolist(),
-        "ltca_converged": np.asarray(ltca.result == RESULTS.successful).tolist(),
-        "accuracy": _accuracy_name(scene.accuracy),
-        "wall_time_s": wall_time_s,
-    }
 
 
 def write_plots(report: dict, directory: Path) -> list[str]:

@@ -2,6 +2,10 @@
 runs, the speed law, units and argument checks."""
 
 import json
+import signal
+import subprocess
+import sys
+import textwrap
 
 import equinox as eqx
 import numpy as np
@@ -38,7 +42,10 @@ def test_load_sweep_matches_single_scenes_in_either_unit(seed_pair):
 #: The default scene at the `fast` accuracy: the API and the command-line tests sweep the
 #: same scene structure and grid shape, so they share one compiled program.
 FAST_SCENE = DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"')
-GRID = ([400.0, 1600.0], [2500.0, 5000.0])
+GRID = (np.linspace(400.0, 1600.0, 7).tolist(), [2500.0, 5000.0])
+#: Root relief of the designs of `design_sweep`, as multiples of the paper optimum's: the
+#: deeper the relief, the later the gear's tip edge strikes (none below 1600 N·m at 6×).
+ROOT_RELIEF_FACTORS = (1.0, 2.0, 6.0)
 
 
 @pytest.fixture(scope="module")
@@ -49,15 +56,16 @@ def impact_grid():
 
 def test_impact_sweep_equals_single_runs_and_follows_the_speed_law(impact_grid):
     """Torque × speed grid in one call: every grid point equals `simulate` of the same scene
-    at that operating point (1e-9), surface contact at 400 N·m and edge contact at
-    1600 N·m for the paper optimum; and from the grid alone, the force at twice the speed is
+    at that operating point (1e-9), surface contact at 400 N·m and edge contact from
+    600 N·m for the paper optimum (its transition is at ~570 N·m at 'fast'); and from the grid alone, the force at twice the speed is
     $2^{2n/(n+1)}$ times the force (energy method, $F \\propto v^{2n/(n+1)}$) at every load."""
     scene, sweep = impact_grid
     impact = sweep.impact
-    assert impact.force.shape == (2, 2)
+    assert impact.force.shape == (7, 2)
     np.testing.assert_allclose(np.asarray(sweep.torques_Nm), GRID[0], rtol=1e-15)
     np.testing.assert_allclose(np.asarray(sweep.speeds_rpm), GRID[1], rtol=1e-15)
-    np.testing.assert_array_equal(np.asarray(impact.regime == ImpactRegime.edge), [[False, False], [True, True]])
+    np.testing.assert_array_equal(np.asarray(impact.regime == ImpactRegime.edge),
+                                  np.repeat(np.asarray(GRID[0])[:, None] >= 600.0, 2, axis=1))
     for i, t in enumerate(GRID[0]):
         for j, n in enumerate(GRID[1]):
             at = eqx.tree_at(lambda s: s.operating, scene, OperatingPoint(torque_Nm=t, speed_rpm=n))
@@ -70,27 +78,56 @@ def test_impact_sweep_equals_single_runs_and_follows_the_speed_law(impact_grid):
         assert float(impact.force[i, 1] / impact.force[i, 0]) == pytest.approx(2.0 ** (2 * exponent / (exponent + 1)), rel=1e-9)
 
 
-def test_design_sweep_rows_equal_each_designs_own_sweeps(impact_grid):
-    """Two designs (the paper optimum and six times its root relief) in one call: each row
-    equals `impact_sweep` of that design alone (1e-9), the speed-free sweep (the Harris
-    map's input) gives the same LTE, and the deeper root relief (the pinion's root meets
-    the gear's tip at mesh-in) keeps flank-on-flank contact at 1600 N·m, where the paper
-    optimum strikes with the gear's tip edge."""
-    scene, sweep = impact_grid
-    relieved = eqx.tree_at(lambda s: s.modification.root_relief, scene, 6.0 * scene.modification.root_relief)
-    designs = design_sweep([scene, relieved], torques_Nm=GRID[0], speeds_rpm=GRID[1])
-    harris = design_sweep([scene, relieved], torques_Nm=GRID[0])
-    assert designs.impact.force.shape == (2, 2, 2) and harris.impact is None
-    for k, single in enumerate((sweep, impact_sweep(relieved, torques_Nm=GRID[0], speeds_rpm=GRID[1]))):
-        np.testing.assert_allclose(np.asarray(designs.impact.force[k]), np.asarray(single.impact.force), rtol=1e-9)
-        np.testing.assert_array_equal(np.asarray(designs.impact.regime == ImpactRegime.edge)[k],
+@pytest.fixture(scope="module")
+def design_grid(impact_grid):
+    scene, _ = impact_grid
+    designs = [eqx.tree_at(lambda s: s.modification.root_relief, scene, f * scene.modification.root_relief)
+               for f in ROOT_RELIEF_FACTORS]
+    return designs, design_sweep(designs, torques_Nm=GRID[0], speeds_rpm=GRID[1])
+
+
+def test_design_sweep_rows_equal_each_designs_own_sweeps(impact_grid, design_grid):
+    """Three designs (the paper optimum and twice and six times its root relief) in one
+    call: each row equals `impact_sweep` of that design alone (1e-9), the speed-free sweep
+    (the Harris map's input) gives the same LTE, and the deepest root relief (the pinion's
+    root meets the gear's tip at mesh-in) keeps flank-on-flank contact at 1600 N·m, where
+    the paper optimum strikes with the gear's tip edge."""
+    _, sweep = impact_grid
+    designs, grid = design_grid
+    harris = design_sweep(designs, torques_Nm=GRID[0])
+    assert grid.impact.force.shape == (3, 7, 2) and harris.impact is None
+    for k, design in enumerate(designs):
+        single = sweep if k == 0 else impact_sweep(design, torques_Nm=GRID[0], speeds_rpm=GRID[1])
+        np.testing.assert_allclose(np.asarray(grid.impact.force[k]), np.asarray(single.impact.force), rtol=1e-9)
+        np.testing.assert_array_equal(np.asarray(grid.impact.regime == ImpactRegime.edge)[k],
                                       np.asarray(single.impact.regime == ImpactRegime.edge))
-        np.testing.assert_allclose(np.asarray(designs.ltca.lte_peak_to_peak_line[k]),
+        np.testing.assert_allclose(np.asarray(grid.ltca.lte_peak_to_peak_line[k]),
                                    np.asarray(single.ltca.lte_peak_to_peak_line), rtol=1e-9)
     np.testing.assert_allclose(np.asarray(harris.ltca.lte_peak_to_peak_line),
-                               np.asarray(designs.ltca.lte_peak_to_peak_line), rtol=1e-9)
-    edge = np.asarray(designs.impact.regime == ImpactRegime.edge)
-    assert edge[0, 1].all() and not edge[1, 1].any()
+                               np.asarray(grid.ltca.lte_peak_to_peak_line), rtol=1e-9)
+    edge = np.asarray(grid.impact.regime == ImpactRegime.edge)
+    assert edge[0, -1].all() and not edge[2, -1].any()
+
+
+def test_regime_map_boundary_agrees_with_the_batched_regime_transition(design_grid):
+    """The regime map of `design_sweep` (regime per design and torque) against the batched
+    bisection of `regime_transition` (all designs in one call): every grid torque below a
+    design's bracket is surface contact, every one above it edge contact; the bracket is
+    within its tolerance (1e-3 of its upper end); the regime does not depend on the speed;
+    a design without a switch between the bounds (6× root relief) gets NaN; and the
+    transition load rises with the root relief."""
+    designs, grid = design_grid
+    edge = np.asarray(grid.impact.regime == ImpactRegime.edge)
+    np.testing.assert_array_equal(edge[..., 0], edge[..., 1])
+    below, above = regime_transition(designs, low_Nm=400.0, high_Nm=1600.0, tolerance=1e-3)  # N·mm
+    assert below.shape == above.shape == (3,)
+    torques = np.asarray(GRID[0]) * 1e3
+    for k in range(2):
+        assert 4.0e5 <= below[k] < above[k] <= 1.6e6 and above[k] - below[k] <= 1e-3 * above[k]
+        outside = (torques <= below[k]) | (torques >= above[k])
+        np.testing.assert_array_equal(edge[k, outside, 0], torques[outside] >= above[k], err_msg=f"design {k}")
+    assert above[0] < below[1]
+    assert np.isnan(below[2]) and np.isnan(above[2]) and not edge[2].any()
 
 
 def test_cli_sweep_writes_the_grid_as_json_npz_and_plots(impact_grid, tmp_path, capsys):
@@ -101,19 +138,76 @@ def test_cli_sweep_writes_the_grid_as_json_npz_and_plots(impact_grid, tmp_path, 
     path = tmp_path / "scene.toml"
     path.write_text(FAST_SCENE)
     out = tmp_path / "run"
-    assert main(["sweep", str(path), "--torque-Nm", "400:1600:2", "--speed-rpm", "2500,5000",
+    assert main(["sweep", str(path), "--torque-Nm", "400:1600:7", "--speed-rpm", "2500,5000",
                  "--out", str(out), "--json", "--plot"]) == 0
     printed = json.loads(capsys.readouterr().out)["sweep"]
     written = json.loads((out / "sweep.json").read_text())["sweep"]
     assert printed["torque_Nm"] == written["torque_Nm"] == GRID[0]
     assert written["speed_rpm"] == pytest.approx(GRID[1], rel=1e-15)
     np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-12)
-    assert written["impact_regime"] == [["surface", "surface"], ["edge", "edge"]]
-    assert len(written["lte_peak_to_peak_um"]) == 2 and all(v > 0 for v in written["lte_peak_to_peak_um"])
+    assert written["impact_regime"] == [["surface", "surface"]] + [["edge", "edge"]] * 6
+    assert len(written["lte_peak_to_peak_um"]) == 7 and all(v > 0 for v in written["lte_peak_to_peak_um"])
     arrays = np.load(out / "sweep.npz")
     np.testing.assert_array_equal(arrays["impact_force_N"], np.asarray(written["impact_force_N"]))
     for name in ("sweep_force_map.png", "sweep_harris.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_sweep_killed_between_chunks_resumes_to_the_uninterrupted_result(impact_grid, tmp_path, capsys):
+    """`--chunk 3` over the 7 torques in a subprocess, SIGKILLed while chunk 2's line is half
+    written (chunk 1 on disk): the directory is refused without `--resume` and for another
+    grid (exit 2, one line naming the difference); `--resume` runs chunks 2 and 3, and the
+    result equals the one-call sweep of the whole grid (1e-12: chunks of 3 are another
+    batch shape than 7 at once, so not bit-equal)."""
+    _, sweep = impact_grid
+    path = tmp_path / "scene.toml"
+    path.write_text(FAST_SCENE)
+    out = tmp_path / "killed"
+    grid = ["--torque-Nm", "400:1600:7", "--speed-rpm", "2500,5000"]
+    script = textwrap.dedent(
+        f"""
+        import os, signal
+        import jax
+        jax.config.update("jax_enable_x64", True)
+        jax.config.update("jax_numpy_dtype_promotion", "strict")
+        from gearjax import rundir
+        from gearjax.cli import main
+
+        saved = rundir.RunDirectory.save
+
+        def save(self, state, record):
+            if record["step"] == 2:  # die with the line of chunk 2 half written
+                with open(self.history_path, "a") as f:
+                    f.write('{{"step": 2, "rows": {{"torq')
+                os.kill(os.getpid(), signal.SIGKILL)
+            saved(self, state, record)
+
+        rundir.RunDirectory.save = save
+        main(["sweep", {str(path)!r}, *{grid!r}, "--chunk", "3", "--out", {str(out)!r}, "--quiet"])
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr[-2000:]
+    lines = (out / "history.jsonl").read_text().splitlines()
+    assert len(lines) == 2 and json.loads(lines[0])["rows"]["torque_Nm"] == GRID[0][:3]
+    assert not (out / "sweep.json").exists()
+    capsys.readouterr()
+    assert main(["sweep", str(path), *grid, "--chunk", "3", "--out", str(out)]) == 2
+    assert "already holds a run" in capsys.readouterr().err
+    assert main(["sweep", str(path), "--torque-Nm", "400:1600:6", "--speed-rpm", "2500,5000", "--chunk", "3",
+                 "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "differs in torque_Nm" in err[0], err
+    assert main(["sweep", str(path), *grid, "--chunk", "3", "--out", str(out), "--resume", "--json", "--quiet"]) == 0
+    printed = json.loads(capsys.readouterr().out)["sweep"]
+    written = json.loads((out / "sweep.json").read_text())["sweep"]
+    assert [json.loads(x)["step"] for x in (out / "history.jsonl").read_text().splitlines()] == [1, 2, 3]
+    assert written["chunks"] == 3 and written["chunk_length"] == 3 and written["torque_Nm"] == GRID[0]
+    np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-12)
+    np.testing.assert_allclose(printed["impact_force_N"], written["impact_force_N"], rtol=0)
+    np.testing.assert_allclose(written["lte_peak_to_peak_um"], np.asarray(sweep.ltca.lte_peak_to_peak_line) * 1e3,
+                               rtol=1e-12)
+    assert written["impact_regime"] == [["surface", "surface"]] + [["edge", "edge"]] * 6
 
 
 @pytest.mark.parametrize("devices", ["gpu0", [], [0, 1]])
@@ -151,7 +245,7 @@ def no_compute(monkeypatch):
 
     monkeypatch.setattr(gearjax.sweep, "_load_sweep", refuse)
     monkeypatch.setattr(gearjax.sweep, "_impact_sweep", refuse)
-    monkeypatch.setattr(gearjax.sweep, "simulate", refuse)
+    monkeypatch.setattr(gearjax.sweep, "_transition", refuse)
 
 
 @pytest.mark.parametrize(

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import sys
 import time
 
 import equinox as eqx
@@ -32,10 +31,11 @@ import numpy as np
 
 from .._custom_types import ArrayLike
 from .._validate import check_int
+from ..progress import Progress
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
 from .objective import Objective
-from .rundir import RunDirectory
+from ..rundir import RunDirectory
 from .space import DesignSpace
 
 METHODS = ("ga", "gradient")
@@ -123,31 +123,6 @@ def _gradient_iteration(objective: Objective, space: DesignSpace, config: Gradie
     return _gradient_step(state, values, grads, config), designs, values
 
 
-# ---------------------------------------------------------------------------- progress
-class _Progress:
-    """A tqdm bar on a terminal, plain lines otherwise ("lines"), or nothing (None)."""
-
-    def __init__(self, mode: str | None, total: int, done: int, label: str):
-        if mode == "auto":
-            mode = "bar" if sys.stderr.isatty() else "lines"
-        self.mode, self.label, self.total, self.bar = mode, label, total, None
-        if mode == "bar":
-            from tqdm.auto import tqdm
-
-            self.bar = tqdm(total=total, initial=done, desc=label, unit=label.split()[0], file=sys.stderr)
-
-    def update(self, step: int, best: float, elapsed: float) -> None:
-        if self.mode == "bar":
-            self.bar.set_postfix(best=f"{best:.6g}", elapsed=f"{elapsed:.0f}s")
-            self.bar.update(1)
-        elif self.mode == "lines":
-            print(f"{self.label} {step}/{self.total}  best {best:.6g}  elapsed {elapsed:.1f} s", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 # ---------------------------------------------------------------------------- drivers
 def _description(method, objective: Objective, space: DesignSpace, config, seed, steps) -> dict:
     o = objective
@@ -197,7 +172,7 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
     initial_design = np.asarray(objective.scene.modification.as_vector())
     initial = records[0]["initial_objective"] if records else _initial_objective(method, objective, space, initial_design, batch)
     samples = int(objective.torques.shape[0]) * objective.samples
-    bar = _Progress(progress, steps, len(records), "generation" if method == "ga" else "iteration")
+    bar = Progress(progress, steps, len(records), "generation" if method == "ga" else "iteration")
     try:
         for step in range(len(records) + 1, steps + 1):
             state, designs, values = step_fn(state)
@@ -217,7 +192,7 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
             records.append(record)
             if directory is not None:
                 directory.save(state, record)
-            bar.update(step, best, elapsed)
+            bar.update(step, elapsed, best=f"{best:.6g}")
             if method == "gradient" and not bool(np.any(np.asarray(state.active))):
                 break
     finally:

@@ -1,6 +1,6 @@
-"""The run directory of an optimisation (see `gearjax.optimize.run` for its files): a
-description checked on resume, the history appended and synced per step, and the state
-replaced atomically."""
+"""The run directory of a long run (an optimisation, `gearjax.optimize.run`; a chunked
+sweep, `gearjax.sweep_run`): a description checked on resume, the history appended and
+synced per step, and the state replaced atomically."""
 
 from __future__ import annotations
 
@@ -14,6 +14,10 @@ import jax.numpy as jnp
 import numpy as np
 
 
+class RunDirectoryError(ValueError):
+    """The run directory holds another run, or one that cannot be resumed."""
+
+
 class RunDirectory:
     """The files of one run (see the module docstring)."""
 
@@ -24,16 +28,16 @@ class RunDirectory:
         existing = self.path / "run.json"
         if existing.exists():
             if not resume:
-                raise ValueError(
+                raise RunDirectoryError(
                     f"run directory {self.path} already holds a run: pass resume=True (--resume) "
                     "to continue it, or choose another directory"
                 )
             saved = json.loads(existing.read_text())
             if saved != json.loads(json.dumps(description)):
                 diff = sorted(k for k in set(saved) | set(description) if saved.get(k) != json.loads(json.dumps(description)).get(k))
-                raise ValueError(f"cannot resume {self.path}: the run differs in {', '.join(diff)}")
+                raise RunDirectoryError(f"cannot resume {self.path}: the run differs in {', '.join(diff)}")
         else:
-            _atomic_write(existing, json.dumps(description, indent=2).encode())
+            atomic_write(existing, json.dumps(description, indent=2).encode())
 
     @property
     def history_path(self) -> Path:
@@ -59,8 +63,8 @@ class RunDirectory:
                     break
                 records.append(record)
         if len(records) != step:
-            raise ValueError(f"cannot resume {self.path}: history has {len(records)} finished steps, state has {step}")
-        _atomic_write(self.history_path, "".join(json.dumps(r) + "\n" for r in records).encode())
+            raise RunDirectoryError(f"cannot resume {self.path}: history has {len(records)} finished steps, state has {step}")
+        atomic_write(self.history_path, "".join(json.dumps(r) + "\n" for r in records).encode())
         return jax.tree_util.tree_unflatten(treedef, restored), records
 
     def save(self, state, record: dict) -> None:
@@ -79,7 +83,8 @@ class RunDirectory:
         os.replace(tmp, self.path / "state.npz")
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write `data` to `path` through a synced temporary file and `os.replace`."""
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "wb") as f:
         f.write(data)
