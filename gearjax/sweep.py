@@ -174,9 +174,9 @@ def impact_sweep(
         speeds_rpm: the same in rev/min ($\\omega = 2\\pi n/60$). Give exactly one.
         throw: raise `SimulationError` if an LTCA or impact entry failed, naming how many
             (as `simulate`); with False inspect `ltca.result` and `impact.result`.
-        devices: shard the torque axis over these devices (`"all"` for `jax.devices()`);
-            None (default) runs on the default device. See `shard_batch`. Experimental:
-            on forced CPU host devices jaxlib 0.10.2's runtime has hung (README, "Sweeps").
+        devices: split the torque axis over these devices (`"all"` for `jax.devices()`):
+            each runs the sweep on its share at the same time, and compiles the program
+            for itself (`_per_device`). None (default) runs on the default device.
 
     Returns:
         `ImpactSweep`, `impact` fields with leading axes `[torque, speed]`.
@@ -191,11 +191,12 @@ def impact_sweep(
     with _precision(scene):
         dtype = jnp.result_type(float)
         torques, speeds = torques.astype(dtype), speeds.astype(dtype)
-        if devices is not None:
-            torques = shard_batch(torques, devices)
-        sweep = _impact_sweep(scene, torques, speeds)
-    if devices is not None:
-        sweep = eqx.tree_at(lambda s: (s.ltca, s.impact), sweep, _rows(count, (sweep.ltca, sweep.impact)))
+        if devices is None:
+            sweep = _impact_sweep(scene, torques, speeds)
+        else:
+            first, (ltca, impact) = _per_device(lambda t, rep: _impact_sweep(rep[0], t, rep[1]), torques, (scene, speeds), devices,
+                                                batched=lambda sw: (sw.ltca, sw.impact))
+            sweep = ImpactSweep(tca=first.tca, ltca=_rows(count, ltca), impact=_rows(count, impact), speed=speeds)
     if throw:
         _check_results(SimulationResult(tca=sweep.tca, ltca=sweep.ltca, impact=sweep.impact))
     return sweep
@@ -278,10 +279,9 @@ def design_sweep(
         speeds / speeds_rpm: pinion speeds (rad/s / rpm), optional; with them the scenes
             need "impact" in their effects.
         throw: raise `SimulationError` if an entry failed (as `simulate`).
-        devices: shard the design axis over these devices (`"all"` for `jax.devices()`):
-            each device runs its share of the designs one after another. None (default)
-            runs on the default device. See `shard_batch`; experimental, as for
-            `impact_sweep`.
+        devices: split the design axis over these devices (`"all"` for `jax.devices()`):
+            each device runs its share of the designs one after another, all devices at
+            the same time (`_per_device`). None (default) runs on the default device.
 
     Returns:
         `DesignSweep` with leading axes `[design, torque(, speed)]`.
@@ -311,14 +311,9 @@ def design_sweep(
         if devices is None:
             ltca, impact = _design_rows(arrays, static, torques, speeds)
         else:
-            # One row of designs per device: the rows are vmapped (and so sharded), each
-            # device runs its designs one after another.
-            per_device = -(-count // len(devices))
-            blocks = jax.tree_util.tree_map(
-                lambda a: shard_batch(_pad(a, per_device * len(devices)).reshape(len(devices), per_device, *a.shape[1:]),
-                                      devices), arrays)
-            ltca, impact = _design_blocks(blocks, static, torques, speeds)
-            ltca, impact = _rows(count, jax.tree_util.tree_map(lambda a: a.reshape(-1, *a.shape[2:]), (ltca, impact)))
+            _, (ltca, impact) = _per_device(lambda a, rep: _design_rows(a, static, *rep), arrays, (torques, speeds),
+                                            devices, batched=lambda out: out)
+            ltca, impact = _rows(count, (ltca, impact))
     sweep = DesignSweep(ltca=ltca, impact=impact, torque=torques, speed=speeds)
     if throw:
         _check_results(SimulationResult(tca=None, ltca=sweep.ltca, impact=sweep.impact))
@@ -343,12 +338,6 @@ def _design_rows(arrays, static, torques, speeds):
 
 
 @eqx.filter_jit
-def _design_blocks(blocks, static, torques, speeds):
-    """`_design_rows` of each block of designs (leading axis, sharded), the blocks vmapped."""
-    return jax.vmap(lambda b: _design_rows_body(b, static, torques, speeds))(blocks)
-
-
-@eqx.filter_jit
 def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
     """The unsharded design sweep of a prepared, stacked scene, as one jitted function
     (benchmarks time its compilation and run)."""
@@ -359,18 +348,55 @@ def _design_sweep(stacked: Scene, torques, speeds) -> DesignSweep:
 
 def shard_batch(values, devices):
     """`values` with its leading (batch) axis split over `devices`: a one-axis `Mesh`
-    ("batch") and `NamedSharding(mesh, P("batch"))`, so a jitted sweep runs each device's
-    share of the batch there (GSPMD partitions the program; no scheduler of ours). The
-    leading axis is padded to a multiple of the device count by repeating its last entry;
-    the sweeps drop the padded rows from their results.
+    ("batch") and `NamedSharding(mesh, P("batch"))`. The leading axis is padded to a
+    multiple of the device count by repeating its last entry; the sweeps drop the padded
+    rows from their results.
 
     On several hosts, start one process per host with `jax.distributed.initialize()` and
     pass `jax.devices()` (all hosts' devices): the same code then shards across hosts."""
-    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+    from jax.sharding import NamedSharding, PartitionSpec
 
-    mesh = Mesh(np.asarray(devices), ("batch",))
     padded = _pad(jnp.asarray(values), -(-values.shape[0] // len(devices)) * len(devices))
-    return jax.device_put(padded, NamedSharding(mesh, PartitionSpec("batch")))
+    return jax.device_put(padded, NamedSharding(_mesh(devices), PartitionSpec("batch")))
+
+
+def _mesh(devices):
+    """The one-axis ("batch") mesh over `devices`."""
+    from jax.sharding import Mesh
+
+    return Mesh(np.asarray(devices), ("batch",))
+
+
+def _per_device(call, batch, replicated, devices, batched):
+    """`call(block, replicated)` on every device of this process, with the device's block
+    of `batch`'s leading axis as `shard_batch` lays it out, and `replicated` copied there.
+
+    Each device runs the sweep's ordinary program on its own block, so no loop of it
+    waits for another device. (A `jit` of the whole batch partitioned by GSPMD must agree
+    on every `vmap`ped solver loop's stopping test across devices at each iteration; with
+    two forced CPU host devices jaxlib 0.10.2's runtime hung in such a program, and
+    equinox's closure conversion inside `jax.shard_map` raises.) JAX dispatches each call
+    asynchronously, so the devices run at once; each compiles the program for itself.
+
+    Returns:
+        The first device's output, and `batched(output)` of all devices joined into global
+        arrays sharded over the mesh (`NamedSharding(mesh, P("batch"))`).
+    """
+    from jax.sharding import NamedSharding, PartitionSpec
+
+    sharding = NamedSharding(_mesh(devices), PartitionSpec("batch"))
+    placed = jax.tree_util.tree_map(lambda a: shard_batch(a, devices), batch)
+    local = [d for d in devices if d.process_index == jax.process_index()]
+    outputs = []
+    for device in local:
+        block = jax.tree_util.tree_map(lambda a, d=device: next(s.data for s in a.addressable_shards if s.device == d), placed)
+        outputs.append(call(block, jax.device_put(replicated, device)))
+    parts = [batched(out) for out in outputs]
+    length = -(-jax.tree_util.tree_leaves(batch)[0].shape[0] // len(devices)) * len(devices)
+    joined = jax.tree_util.tree_map(
+        lambda *leaves: jax.make_array_from_single_device_arrays((length, *leaves[0].shape[1:]), sharding, list(leaves)),
+        *parts)
+    return outputs[0], joined
 
 
 def _pad(a, length: int):

@@ -7,11 +7,10 @@ Runs, in a subprocess with `XLA_FLAGS=--xla_force_host_platform_device_count=N`,
 `devices="all"` (padded to N), and `design_sweep` of 3 designs × 2 torques on one device and
 on 2 devices; prints the largest relative differences and exits 1 if any exceeds 1e-9.
 
-Not in the test suite: on this 2-core machine, jaxlib 0.10.2's CPU runtime with forced
-host devices deadlocked (every thread parked, no progress for 10 min) in
-`benchmarks/sweep.py --sharded` with 2 devices, already in the unsharded 16-load call; the
-4-device check below passed 3 of 3 times. A hang in CI would cost the whole run, so the
-check is a tool with a timeout until the runtime issue is understood.
+Not in the test suite: every device compiles the sweep program for itself (~2 min on 4
+forced devices on this 2-core machine), and forced host devices once hung jaxlib 0.10.2's
+CPU runtime even in an unsplit call (README, "Sweeps"); a hang in CI would cost the whole
+run, so the check is a tool with a timeout.
 """
 
 from __future__ import annotations
