@@ -9,6 +9,7 @@ paper optimum, 1000 N·m, 5000 rpm) with its effects and compliance chosen so th
 
 | stage | scene | simulate runs |
 |---|---|---|
+| tca_unmodified | no torque, no modification, `tca_method="surface"` | TCA of the bare flanks |
 | tca_surface | no torque, `tca_method="surface"` | TCA (general, on the real flanks) |
 | tca_plane_of_action | no torque, `tca_method="plane_of_action"` | TCA (involute fast path) |
 | ltca_iso | torque, `IsoCompliance()` | surface TCA + LTCA |
@@ -20,6 +21,10 @@ scene's arrays, timed phase by phase (`.trace`, `.lower`, `.compile`, first run,
 of steady runs), in a fresh process per repeat: JAX caches traces within a process, so a
 second stage in the same process would time the cache. The persistent compilation cache
 is off there. A stage's own cost is its row minus the row it builds on (`increment`).
+
+`python benchmarks/stages.py --stages tca_unmodified tca_surface ltca_slice impact --no-cli
+--name effects` gives one row per scene kind (rigid unmodified, rigid modified, loaded,
+loaded with impact): what each effect costs when a scene asks for it.
 
 CLI: wall time of `python -m gearjax.cli run` (the `gearjax run` command, import
 included) on the default scene, cold (a fresh empty `GEARJAX_CACHE_DIR` in a temporary
@@ -52,7 +57,8 @@ sys.path.insert(0, str(HERE))
 
 #: The stages in pipeline order, and the stage each one builds on (for the increment).
 STAGES = {
-    "tca_surface": None,
+    "tca_unmodified": None,
+    "tca_surface": "tca_unmodified",
     "tca_plane_of_action": None,
     "ltca_iso": "tca_surface",
     "ltca_slice": "tca_surface",
@@ -72,6 +78,9 @@ def stage_scene(stage: str, accuracy: str):
     scene, _ = default_scene()
     acc = scene.accuracy if accuracy == "default" else gj.Accuracy.preset(accuracy)
     rigid = gj.OperatingPoint(speed=scene.operating.speed)
+    if stage == "tca_unmodified":
+        return dataclasses.replace(scene, modification=None, operating=rigid, effects=frozenset(),
+                                   accuracy=acc.replace(tca_method="surface"))
     if stage == "tca_surface":
         return dataclasses.replace(scene, operating=rigid, effects=frozenset(), accuracy=acc.replace(tca_method="surface"))
     if stage == "tca_plane_of_action":

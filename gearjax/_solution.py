@@ -59,6 +59,17 @@ class RESULTS(eqx.Enumeration):
         "The loaded contact solve of the pairs in mesh did not converge at the first-contact "
         "position. Raise Accuracy.contact_max_steps."
     )
+    invalid_modification = (
+        "A flank modification given as traced values (built inside jit, vmap or grad, where "
+        "its constructor cannot check them) is out of range: y1, y2, y5 must be in [0, 1] mm, "
+        "y3 and y4 in (0, the roll length of the active flank], y6 in [0, the face width), "
+        "all finite. The outputs of the stage are NaN. Check the values with the "
+        "FlankModification constructor outside the transformation."
+    )
+    invalid_operating_point = (
+        "A torque or speed given as traced values (inside jit, vmap or grad) is negative or "
+        "not finite; the outputs of the stage are NaN."
+    )
     stiffness_fit_failed = (
         "A contact solve of the local force-approach curve at the impact point did not "
         "converge, so the stiffness fit F = K_s delta^n is unreliable. Raise "

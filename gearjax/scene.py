@@ -301,18 +301,22 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
 
 
 def _check_results(result: SimulationResult) -> None:
-    """Raise `SimulationError` for the first failed loaded stage; skipped when the results
-    are traced (inside a transformation)."""
+    """Raise `SimulationError` for the first failed stage (the TCA only for out-of-range
+    traced inputs: its unconverged candidates are a code, not an error); skipped when the
+    results are traced (inside a transformation)."""
     from ._solution import RESULTS, SimulationError, enum_message, enum_name
 
     if not is_concrete(result):
         return
-    for stage in ("ltca", "impact"):
+    for stage in ("tca", "ltca", "impact"):
         stage_result = getattr(result, stage)
         if stage_result is None:
             continue
         codes = stage_result.result
-        failed = np.asarray(codes != RESULTS.successful)
+        if stage == "tca":  # an unconverged TCA candidate is a code, not an error
+            failed = np.asarray((codes == RESULTS.invalid_modification) | (codes == RESULTS.invalid_operating_point))
+        else:
+            failed = np.asarray(codes != RESULTS.successful)
         if not failed.any():
             continue
         names = sorted(set(np.atleast_1d(enum_name(codes))[np.atleast_1d(failed)].tolist()))
@@ -352,7 +356,45 @@ def _simulate(scene: Scene) -> SimulationResult:
                 pairs=scene.pairs,
                 inertia=scene.inertia,
             )
-    return SimulationResult(tca=tca, ltca=ltca, impact=impact)
+    return _guard_traced_inputs(scene, pair, SimulationResult(tca=tca, ltca=ltca, impact=impact))
+
+
+def _guard_traced_inputs(scene: Scene, pair, result: SimulationResult) -> SimulationResult:
+    """NaN outputs and a named result code where an input that the constructors could not
+    check (traced values) is out of range: the modifications (`FlankModification.in_range`
+    on every contact zone) and the operating point (torque, speed >= 0 and finite). For
+    concrete inputs the checks always pass (the constructors ran them), and the program
+    keeps no host callback, so it stays cacheable."""
+    from ._solution import RESULTS
+
+    codes = []
+    for gear, modification in ((0, scene.modification), (1, scene.gear_modification)):
+        if modification is None:
+            continue
+        for zone in pair.contact_zones():
+            start, tip = zone.relief_coordinates(gear)
+            codes.append((modification.in_range(tip - start, zone.face_width), RESULTS.invalid_modification))
+    for value in (scene.operating.torque, scene.operating.speed):
+        if value is not None:
+            codes.append((jnp.isfinite(value) & (value >= 0), RESULTS.invalid_operating_point))
+    if not codes:
+        return result
+    ok = jnp.asarray(True)
+    for good, _ in codes:
+        ok = ok & good
+    stages = {}
+    for name in ("tca", "ltca", "impact"):
+        stage = getattr(result, name)
+        if stage is None:
+            stages[name] = None
+            continue
+        code = stage.result
+        for good, failure in reversed(codes):  # the first failed check names the failure
+            code = RESULTS.where(good, code, failure)
+        nan = jax.tree_util.tree_map(
+            lambda x: jnp.where(ok, x, jnp.nan) if eqx.is_inexact_array(x) else x, stage)
+        stages[name] = eqx.tree_at(lambda s: s.result, nan, code)
+    return SimulationResult(**stages)
 
 
 def program_text(scene: Scene) -> str:

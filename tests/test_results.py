@@ -13,7 +13,7 @@ import gearjax as gj
 from gearjax._solution import RESULTS, SimulationError, enum_message, enum_name
 from gearjax.ltca import IsoCompliance
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.scene import program_text
+from gearjax.scene import _check_results, program_text
 from gearjax.tca import ContactKind
 from gearjax.tca._slice import CANDIDATES, contact_kind
 
@@ -133,3 +133,43 @@ def test_compiled_simulate_program_has_no_host_callback(seed_pair, effects, comp
         compliance=compliance, effects=effects, accuracy=TINY, pairs=(-2, -1, 0, 1, 2),
     )
     assert not CALLBACK.search(program_text(scene))
+
+
+def test_out_of_range_traced_inputs_give_nan_and_a_named_code(seed_pair):
+    """Inside jit the constructors cannot check traced values (issue #12, part 7): a
+    modification with y6 = b (the crowning parabola's 0/0) gives NaN outputs and
+    `invalid_modification` on every stage, a negative torque `invalid_operating_point`;
+    in range, the same compiled program gives the concrete scene's numbers; and a
+    concrete out-of-range code raises `SimulationError` naming it."""
+    b = float(seed_pair.face_width)
+    pairs = gj.Scene(seed_pair, accuracy=TINY).pairs  # the tooth-pair window needs concrete geometry
+
+    def run(y, torque):
+        scene = gj.Scene(seed_pair, gj.FlankModification.from_vector(y), operating=gj.OperatingPoint(torque=torque),
+                         accuracy=TINY, pairs=pairs)
+        result = gj.simulate(scene)  # traced: no check here, the codes come out
+        return result.tca.transmission_error, result.ltca.transmission_error, result.tca.result, result.ltca.result
+
+    good = jnp.asarray(paper_optimum().as_vector())
+    f = jax.jit(run)
+    te, lte, tca_code, ltca_code = f(good, jnp.asarray(1.0e6))
+    assert enum_name(tca_code) == "successful" and enum_name(ltca_code) == "successful"
+    concrete = gj.simulate(_loaded(seed_pair))
+    np.testing.assert_allclose(np.asarray(lte), np.asarray(concrete.ltca.transmission_error), rtol=1e-10)
+    for y, torque, name in ((good.at[5].set(b), 1.0e6, "invalid_modification"),
+                            (good.at[2].set(-1.0), 1.0e6, "invalid_modification"),
+                            (good, -1.0, "invalid_operating_point")):
+        te, lte, tca_code, ltca_code = f(y, jnp.asarray(torque))
+        assert enum_name(tca_code) == enum_name(ltca_code) == name
+        assert np.isnan(np.asarray(te)).all() and np.isnan(np.asarray(lte)).all()
+    assert "y6 in [0, the face width)" in enum_message(RESULTS.invalid_modification)
+    # the gradient in range stays finite through the guard
+    grad = jax.grad(lambda y: jnp.sum(run(y, jnp.asarray(1.0e6))[1]))(good)
+    assert np.isfinite(np.asarray(grad)).all()
+    # a concrete result with the code raises, naming the stage and the code
+    bad = jax.jit(lambda y: gj.simulate(gj.Scene(seed_pair, gj.FlankModification.from_vector(y), accuracy=TINY,
+                                                 pairs=pairs)))(
+        good.at[5].set(b))
+    with pytest.raises(SimulationError, match="invalid_modification") as info:
+        _check_results(bad)
+    assert info.value.stage == "tca"

@@ -22,11 +22,17 @@ from gearjax.scene import program_text, stack_scenes
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)
 
 
-def test_unmodified_scene_compiles_no_modification_or_error_term(seed_pair):
-    bare = program_text(Scene(seed_pair, accuracy=TINY))
-    assert "stage_tca" in bare
+@pytest.mark.parametrize("effects", [(), ("ltca",), ("impact",)], ids=["rigid", "loaded", "impact"])
+def test_unmodified_scene_compiles_no_modification_or_error_term(seed_pair, effects):
+    """Rigid, loaded and impact scenes: the program of the bare pair has no relief or error
+    term (in none of its stages: TCA, LTCA, first-contact search), the modified pair's
+    program has both."""
+    operating = OperatingPoint(torque=1.0e6, speed=500.0) if effects else OperatingPoint()
+    bare = program_text(Scene(seed_pair, operating=operating, effects=effects, accuracy=TINY))
+    assert "stage_tca" in bare and ("stage_ltca" in bare) == bool(effects) and ("stage_impact" in bare) == ("impact" in effects)
     assert "term_modification" not in bare and "term_errors" not in bare
-    full = program_text(Scene(seed_pair, paper_optimum(), errors=MeshErrors(pitch_deviation=0.001), accuracy=TINY))
+    full = program_text(Scene(seed_pair, paper_optimum(), errors=MeshErrors(pitch_deviation=0.001), operating=operating,
+                              effects=effects, accuracy=TINY))
     assert "term_modification" in full and "term_errors" in full
 
 

@@ -20,7 +20,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from .._custom_types import ArrayLike, Scalar
+from .._custom_types import Array, ArrayLike, Bool, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
 
@@ -117,6 +117,20 @@ class FlankModification(eqx.Module):
         half_crowned = 0.5 * (face_width - self.unmodified_length)
         crown = self.crowning * jnp.square(jnp.maximum(jnp.abs(w) - half_free, 0.0) / half_crowned)
         return tip + root + crown
+
+    def in_range(self, flank_length: ArrayLike, face_width: ArrayLike) -> Bool[Array, "..."]:
+        """Traced counterpart of the constructor's checks and `check_fits`: True where every
+        parameter is finite, $y_1, y_2, y_5 \\in [0, 1]$ mm, $y_3, y_4 \\in (0, L]$ ($L$ =
+        `flank_length`, the active flank's roll length, mm) and $y_6 \\in [0, b)$ ($b$ =
+        `face_width`, mm). `simulate` uses it for values that were traced when the
+        modification was built (inside jit, vmap or grad), where the constructor's checks
+        cannot run."""
+        y1, y2, y3, y4, y5, y6 = (self.root_relief, self.tip_relief, self.root_relief_length,
+                                  self.tip_relief_length, self.crowning, self.unmodified_length)
+        finite = jnp.all(jnp.isfinite(self.as_vector()), axis=-1)
+        amounts = (y1 >= 0) & (y1 <= 1) & (y2 >= 0) & (y2 <= 1) & (y5 >= 0) & (y5 <= 1)
+        lengths = (y3 > 0) & (y3 <= flank_length + 1e-12) & (y4 > 0) & (y4 <= flank_length + 1e-12)
+        return finite & amounts & lengths & (y6 >= 0) & (y6 < face_width)
 
     def check_fits(self, flank_length: ArrayLike, face_width: ArrayLike, name: str = "modification") -> None:
         """Reject relief zones longer than the active flank and a central unmodified length
