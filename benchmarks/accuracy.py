@@ -1,0 +1,155 @@
+"""What accuracy costs in time (issue #12, part 1): error against `reference` and time, per
+preset and per knob varied alone around `default`.
+
+    python benchmarks/accuracy.py [--cases seed001,spur,curvilinear] [--repeats 3]
+
+Cases (each through the public `simulate`, one compiled program per case and setting):
+
+* `seed001`: seed 001's pair with the paper optimum, TCA + LTCA + impact at 400, 1000 and
+  1600 N·m and 5000 rpm (surface contact at 400, edge contact above ~590 N·m);
+* `spur`: an unmodified 23/41 spur pair (m 4 mm, b 20 mm), TCA + LTCA at 200 N·m;
+* `curvilinear`: seed 002's curvilinear pair (R_t 20 mm), TCA + LTCA at 100 N·m.
+
+Settings: the presets `fast`, `default`, `reference`, and `default` with one knob changed
+(positions per pitch, face slices, Newton tolerances, quadrature points, impact fit points,
+the plane-of-action TCA, float32). Quantities, in the units of `gearjax run --json`: TE
+and LTE peak-to-peak, LTE mean, mean mesh stiffness, maximum load share, maximum pressure,
+impact force, strike point (mm) and regime. Errors are relative to `reference` (the
+strike point's in mm, the regime as equal or not); times are the first call minus one run
+(trace + compile) and the median of `--repeats` runs. Writes
+benchmarks/results/accuracy.json; `--plot` draws docs/figures/accuracy_pareto.png from it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import numpy as np  # noqa: E402
+from _common import machine, write  # noqa: E402
+
+import gearjax as gj  # noqa: E402
+from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
+from gearjax.report import result_dict  # noqa: E402
+
+#: Quantity name -> path in `result_dict`.
+QUANTITIES = {
+    "te_pp_um": ("tca", "te_peak_to_peak_um"),
+    "lte_pp_um": ("ltca", "lte_peak_to_peak_um"),
+    "lte_mean_um": ("ltca", "lte_mean_um"),
+    "stiffness": ("ltca", "mean_mesh_stiffness_N_per_mm_um"),
+    "load_share": ("ltca", "max_load_share"),
+    "pressure_MPa": ("ltca", "max_pressure_MPa"),
+    "impact_force_N": ("impact", "force_N"),
+}
+
+DEFAULT = gj.Accuracy.preset("default")
+SETTINGS = {
+    "fast": gj.Accuracy.preset("fast"),
+    "default": DEFAULT,
+    "reference": gj.Accuracy.preset("reference"),
+    "positions 16": DEFAULT.replace(positions_per_pitch=16),
+    "positions 64": DEFAULT.replace(positions_per_pitch=64),
+    "slices 9": DEFAULT.replace(face_slices=9),
+    "slices 41": DEFAULT.replace(face_slices=41),
+    "newton 1e-8": DEFAULT.replace(newton_rtol=1e-8, newton_atol=1e-8),
+    "newton 1e-13": DEFAULT.replace(newton_rtol=1e-13, newton_atol=1e-13),
+    "quadrature 12": DEFAULT.replace(quadrature_points=12),
+    "quadrature 48": DEFAULT.replace(quadrature_points=48),
+    "fit points 4": DEFAULT.replace(impact_fit_points=4),
+    "fit points 12": DEFAULT.replace(impact_fit_points=12),
+    "plane of action": DEFAULT.replace(tca_method="plane_of_action"),
+    "float32": DEFAULT.replace(dtype="float32"),
+}
+
+
+def cases():
+    seed = seed_pair()
+    spur = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 0.0, 20.0)
+    curvilinear = gj.CurvilinearGearPair((20, 30), 2.0, 20.0, 20.0, 20.0)
+    return {
+        "seed001": [(f"{t:g} N m", seed, paper_optimum(), gj.OperatingPoint(torque_Nm=t, speed_rpm=5000.0), ("impact",))
+                    for t in (400.0, 1000.0, 1600.0)],
+        "spur": [("200 N m", spur, gj.FlankModification(), gj.OperatingPoint(torque_Nm=200.0), ("ltca",))],
+        "curvilinear": [("100 N m", curvilinear, gj.FlankModification(), gj.OperatingPoint(torque_Nm=100.0), ("ltca",))],
+    }
+
+
+def measure(loads, accuracy, repeats):
+    """Quantities per load, trace + compile seconds and median run seconds of `simulate`."""
+    values, compile_s, run_s = [], None, []
+    for _, pair, modification, operating, effects in loads:
+        scene = gj.Scene(pair, modification, operating=operating, effects=effects, accuracy=accuracy)
+        t0 = time.perf_counter()
+        result = jax.block_until_ready(gj.simulate(scene, throw=False))
+        first = time.perf_counter() - t0
+        runs = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            jax.block_until_ready(gj.simulate(scene, throw=False))
+            runs.append(time.perf_counter() - t0)
+        if compile_s is None:
+            compile_s = first - statistics.median(runs)
+        run_s.append(statistics.median(runs))
+        d = result_dict(scene, result)
+        row = {name: d.get(stage, {}).get(key) for name, (stage, key) in QUANTITIES.items()}
+        if "impact" in d:
+            row["strike_point_mm"] = d["impact"]["point_mm"]
+            row["regime"] = d["impact"]["regime"]
+        row["converged"] = all(d.get(stage, {}).get("result", "successful") == "successful" for stage in ("tca", "ltca", "impact"))
+        values.append(row)
+    return values, compile_s, statistics.median(run_s)
+
+
+def errors(values, reference):
+    """Largest error of each quantity over the loads: relative for the numbers, mm for the
+    strike point, and whether every regime agrees."""
+    out = {}
+    for name in QUANTITIES:
+        pairs = [(v[name], r[name]) for v, r in zip(values, reference, strict=True) if r.get(name) is not None]
+        if pairs:
+            out[name] = max(abs(v - r) / max(abs(r), 1e-12) if v is not None and math.isfinite(v) else math.inf
+                            for v, r in pairs)
+    if "strike_point_mm" in reference[0]:
+        out["strike_point_mm"] = max(float(np.linalg.norm(np.subtract(v["strike_point_mm"], r["strike_point_mm"])))
+                                     for v, r in zip(values, reference, strict=True))
+        out["regime_equal"] = all(v["regime"] == r["regime"] for v, r in zip(values, reference, strict=True))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--cases", default="seed001,spur,curvilinear")
+    parser.add_argument("--settings", default=",".join(SETTINGS))
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    table = cases()
+    rows = []
+    for case in args.cases.split(","):
+        loads = table[case]
+        reference, ref_compile, ref_run = measure(loads, SETTINGS["reference"], args.repeats)
+        print(f"{case}: reference compile {ref_compile:.1f} s, run {ref_run * 1e3:.1f} ms", flush=True)
+        for name in args.settings.split(","):
+            if name == "reference":
+                values, compile_s, run_s = reference, ref_compile, ref_run
+            else:
+                values, compile_s, run_s = measure(loads, SETTINGS[name], args.repeats)
+            err = errors(values, reference)
+            rows.append({"case": case, "setting": name, "compile_s": compile_s, "run_s": run_s,
+                         "run_fraction_of_reference": run_s / ref_run, "errors": err,
+                         "values": values, "loads": [load[0] for load in loads]})
+            worst = max((v for k, v in err.items() if k not in ("strike_point_mm", "regime_equal")), default=0.0)
+            print(f"  {name:16s} compile {compile_s:6.1f} s  run {run_s * 1e3:9.1f} ms ({run_s / ref_run:6.1%})  "
+                  f"worst rel. error {worst:.2e}  " + "  ".join(f"{k} {v:.1e}" if isinstance(v, float) else f"{k} {v}"
+                                                              for k, v in err.items()), flush=True)
+            write("accuracy", {"machine": machine(), "rows": rows})
+
+
+if __name__ == "__main__":
+    main()
