@@ -136,11 +136,17 @@ def main() -> None:
     parser.add_argument("--settings", default=",".join(SETTINGS))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--plot", action="store_true", help="only draw the figure from the results file")
+    parser.add_argument("--resume-from", help="keep the rows of the other cases from this results file")
     args = parser.parse_args()
     if args.plot:
         return plot()
     table = cases()
     rows = []
+    if args.resume_from:
+        import json
+        from pathlib import Path
+
+        rows = [r for r in json.loads(Path(args.resume_from).read_text())["rows"] if r["case"] not in args.cases.split(",")]
     for case in args.cases.split(","):
         loads = table[case]
         reference, ref_compile, ref_run = measure(loads, SETTINGS["reference"], args.repeats)
@@ -159,6 +165,10 @@ def main() -> None:
                   f"worst rel. error {worst:.2e}  " + "  ".join(f"{k} {v:.1e}" if isinstance(v, float) else f"{k} {v}"
                                                               for k, v in err.items()), flush=True)
             write("accuracy", {"machine": machine(), "rows": rows})
+            # Drop the compiled programs: each holds its machine code in memory maps, and a
+            # process that compiled ~30 large programs hit the kernel's map limit
+            # (vm.max_map_count; LLVM "Cannot allocate memory", then a segfault).
+            jax.clear_caches()
 
 
 def plot() -> None:
