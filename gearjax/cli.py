@@ -88,8 +88,14 @@ def _run(args: argparse.Namespace) -> int:
     except SceneFileError as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
+    from .resources import MemoryEstimateError
+
     # The summary reports every stage's result code, so a failed stage is shown, not raised.
-    result = simulate(scene, throw=False)
+    try:
+        result = simulate(scene, throw=False)
+    except MemoryEstimateError as err:
+        print(f"gearjax: error: {err}", file=sys.stderr)
+        return 2
     out = result_dict(scene, result, notes)
     if args.json:
         print(json.dumps(out, indent=2))

@@ -36,6 +36,7 @@ from .ltca import AbstractCompliance, ContactModel, LTCAResult, SliceCompliance,
 from .tca import TCAResult, pair_window, tooth_contact_analysis
 from .operating import OperatingPoint
 from .program_cache import cached_call
+from .resources import check_memory
 from .units import Material
 
 
@@ -288,7 +289,13 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
 
     Returns:
         `SimulationResult` with `tca` always and `ltca` / `impact` when requested.
+
+    Raises:
+        MemoryEstimateError: (a `ValueError`) before anything is compiled, when the
+            program's estimated memory exceeds what the device has
+            (`gearjax.resources`); it names the knobs and the face-slice count that fits.
     """
+    check_memory(scene)
     scene = _prepare(scene)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):

@@ -26,6 +26,7 @@ from ._validate import check_range
 from .impact import ImpactRegime, ImpactResult, impact_analysis
 from .ltca import LTCAResult, loaded_contact_analysis
 from .operating import _MAX_SPEED
+from .resources import check_memory
 from .scene import Scene, SimulationResult, _check_results, _prepare, stack_scenes
 from .tca import TCAResult, tooth_contact_analysis
 from .units import rad_per_s_to_rpm, rpm_to_rad_per_s
@@ -90,6 +91,7 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
         in engine units (`ltca.torque` in N·mm).
     """
     torques = _torques(torques, torques_Nm)
+    check_memory(scene, loads=torques.shape[0], what="load_sweep")
     scene = _prepare(scene)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):
@@ -186,6 +188,7 @@ def impact_sweep(
     if "impact" not in scene.effects:
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
+    check_memory(scene, loads=-(-torques.shape[0] // (1 if devices is None else len(devices))), what="impact_sweep")
     scene = _prepare(scene)
     count = torques.shape[0]
     with _precision(scene):
@@ -301,6 +304,7 @@ def design_sweep(
     if speeds is not None and "impact" not in stacked.effects:
         raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
+    check_memory(stacked, loads=torques.shape[0], what="design_sweep")
     stacked = _prepare(stacked)
     arrays, static = eqx.partition(stacked, eqx.is_array)
     count = jax.tree_util.tree_leaves(arrays)[0].shape[0]

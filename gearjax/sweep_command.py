@@ -79,13 +79,14 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
     except (ListError, SceneFileError) as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
+    from .resources import MemoryEstimateError
     from .rundir import RunDirectoryError
     from .sweep_run import run_impact_sweep
 
     progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
     try:
         report = run_impact_sweep(scene, torques_Nm, speeds_rpm, chunk=chunk, out=out, resume=resume, progress=progress)
-    except RunDirectoryError as err:  # the directory holds another sweep, or --resume is missing
+    except (RunDirectoryError, MemoryEstimateError) as err:  # another sweep in --out; too big a chunk
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
     if out is not None and plot:
