@@ -42,6 +42,21 @@ def spur_pair():
     return InvoluteGearPair((23, 41), 4.0, 20.0, 0.0, 20.0)
 
 
+@pytest.fixture
+def forbid(monkeypatch):
+    """`forbid(module, *names)`: calling any of those functions fails the test, which so
+    shows that a check came before any computation."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("computed before the arguments were checked")
+
+    def patch(module, *names):
+        for name in names:
+            monkeypatch.setattr(module, name, refuse)
+
+    return patch
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _release_compiled_programs():
     """Each test file shares its compiled programs through module-scoped fixtures; once the

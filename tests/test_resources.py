@@ -19,12 +19,10 @@ from gearjax.sweep import load_sweep
 
 
 @pytest.fixture
-def no_compute(monkeypatch):
-    def refuse(*args, **kwargs):
-        raise AssertionError("compiled before the memory check")
-
-    monkeypatch.setattr(gearjax.scene, "_simulate", refuse)
-    monkeypatch.setattr(gearjax.sweep, "_load_sweep", refuse)
+def no_compute(forbid):
+    """Fail if anything is compiled before the memory check."""
+    forbid(gearjax.scene, "_simulate")
+    forbid(gearjax.sweep, "_load_sweep")
 
 
 def test_a_scene_that_cannot_fit_is_refused_before_compiling(seed_pair, no_compute, monkeypatch):

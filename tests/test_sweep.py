@@ -237,15 +237,9 @@ def test_cli_sweep_rejects_bad_lists_with_status_2(option, value, match, capsys)
 
 
 @pytest.fixture
-def no_compute(monkeypatch):
+def no_compute(forbid):
     """Fail if a sweep gets as far as computing: the checks must come first."""
-
-    def refuse(*args, **kwargs):
-        raise AssertionError("computed before the arguments were checked")
-
-    monkeypatch.setattr(gearjax.sweep, "_load_sweep", refuse)
-    monkeypatch.setattr(gearjax.sweep, "_impact_sweep", refuse)
-    monkeypatch.setattr(gearjax.sweep, "_transition", refuse)
+    forbid(gearjax.sweep, "_load_sweep", "_impact_sweep", "_transition")
 
 
 @pytest.mark.parametrize(
