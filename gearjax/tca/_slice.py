@@ -108,7 +108,8 @@ class SliceContact(eqx.Module):
         kind: index of the touching candidate in `CANDIDATES` (0 flank, 1 gear-tip edge,
             2 pinion-tip edge); `contact_kind` turns it into a `ContactKind`.
         valid: some candidate converged on the active flanks.
-        unconverged: number of relevant candidates whose Newton solve failed (0 to 3).
+        unconverged: number of relevant candidates whose Newton solve failed with its last
+            iterate on the active flanks (0 to 3).
     """
 
     offset: Float[Array, "..."]
@@ -117,6 +118,15 @@ class SliceContact(eqx.Module):
     kind: Array
     valid: Array
     unconverged: Array
+
+
+def _parameter_tolerance(scale):
+    """Tolerance on profile parameters of magnitude `scale` (mm): 1e-9 relative, or 64
+    units in the last place where the dtype is coarser (float32: a Newton solution pinned
+    at a tip differs from it by an ulp or two, which a 1e-9 tolerance would turn into a
+    missing contact, and so into a jump of the TE at the tip)."""
+    eps = float(jnp.finfo(jnp.result_type(scale)).eps)
+    return max(1e-9, 64 * eps) * (1.0 + jnp.abs(scale))
 
 
 def _within(u, limits, tol):
@@ -177,6 +187,9 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
         lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one])
     )
     selectors = jnp.eye(3, dtype=one.dtype)
+    (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
+    active_lo, active_hi = jnp.stack([lo1, lo2]), jnp.stack([hi1, hi2])
+    tol = _parameter_tolerance(active_hi)
 
     def solve(y0, selector, relevant):
         sol = optx.root_find(
@@ -184,7 +197,16 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
             max_steps=max_steps, throw=False, adjoint=ADJOINT,
         )
         success = sol.result == optx.RESULTS.successful
-        return sol.value, success & relevant, relevant & ~success
+        # A failure counts where the solve may have missed a contact: where its last
+        # iterate lies on the active flanks. An iterate off them (on a free coordinate:
+        # both for the flank, u1 for the gear-tip edge, u2 for the pinion-tip edge) is
+        # heading for a root that `select_contact` would reject anyway: held at the
+        # domain's bound at the base circle, or creeping (a near-double root) beyond a
+        # tip where the edge candidate takes over.
+        free = jnp.stack([selector[2] == 0, selector[1] == 0])
+        u = sol.value[:2]
+        off_flank = jnp.any(free & ((u < active_lo - tol) | (u > active_hi + tol)))
+        return sol.value, success & relevant, relevant & ~success & ~off_flank
 
     return jax.vmap(solve)(_starts(problem), selectors, relevance(problem))
 
@@ -193,7 +215,7 @@ def select_contact(problem: SliceProblem, values, converged, failed) -> SliceCon
     """Keep the first contact among the valid candidates (largest offset)."""
     pair = problem.pair
     lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
-    tol = 1e-9 * (1.0 + lim1[1])
+    tol = _parameter_tolerance(lim1[1])
     ok = converged & _within(values[:, 0], lim1, tol) & _within(values[:, 1], lim2, tol)
     # On ties (flank contact exactly at a tip) argmax keeps the first: the flank.
     kind = jnp.argmax(jnp.where(ok, values[:, 2], -jnp.inf))

@@ -42,8 +42,10 @@ class TCAResult(eqx.Module):
         action_radius: $(r_{b1}, r_{b2})$ (mm), shape (2,): the radii converting the
             angles of pinion and gear to the transverse line of action (base radii for
             involute flanks).
-        unconverged: relevant candidate solves that failed, per slice (0 to 3); their
-            candidates are excluded, so a non-zero count flags a possibly missed contact.
+        unconverged: relevant candidate solves that failed with their last iterate on the
+            active flanks, per slice (0 to 3); their candidates are excluded, so a
+            non-zero count flags a possibly missed contact. (A failed solve whose iterate
+            left the active flanks is not counted: its contact would be rejected anyway.)
         result: `RESULTS.successful`, or `RESULTS.tca_unconverged` where some count of
             `unconverged` is non-zero (a warning: the other contacts are valid).
     """
