@@ -12,11 +12,25 @@ from __future__ import annotations
 import dataclasses
 
 import equinox as eqx
+import jax.numpy as jnp
 
 from ._validate import check_choice, check_int, check_range
 
 TCA_METHODS = ("surface", "plane_of_action")
 DTYPES = ("float64", "float32")
+
+
+def floored_tolerances(rtol: float, atol: float, dtype) -> tuple[float, float]:
+    """`(rtol, atol)` floored near the precision of `dtype`: 16 and 64 machine epsilons.
+
+    One rule for every Newton iteration of the engine (surface TCA, contact solver,
+    first-contact search): float32 (machine epsilon 1.2e-7) cannot meet 1e-8, and a solve that
+    stops short of its tolerance by rounding alone would be reported unconverged (a TCA
+    candidate would drop its contact, making the TE jump). In float64 the floors (3.6e-15,
+    1.4e-14) lie below every preset's tolerances.
+    """
+    eps = float(jnp.finfo(dtype).eps)
+    return max(float(rtol), 16 * eps), max(float(atol), 64 * eps)
 
 
 class Accuracy(eqx.Module):
@@ -88,6 +102,11 @@ class Accuracy(eqx.Module):
         """Named presets: "fast", "default", "reference"."""
         check_choice("accuracy preset", name, tuple(PRESETS))
         return PRESETS[name]
+
+    def newton_tolerances(self, dtype) -> tuple[float, float]:
+        """`(rtol, atol)`: `newton_rtol`, `newton_atol` floored near the precision of
+        `dtype` (`floored_tolerances`)."""
+        return floored_tolerances(self.newton_rtol, self.newton_atol, dtype)
 
     def replace(self, **changes) -> "Accuracy":
         """A copy with some fields changed (validated)."""

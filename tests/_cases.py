@@ -1,5 +1,5 @@
-"""Named hard cases and a seeded sampler of random valid designs, shared by
-`test_hard_cases.py` and `test_random_designs.py`.
+"""Named hard cases and a seeded sampler of random valid designs, shared by the
+`test_hard_cases*.py` files.
 
 Tooth counts, the tooth-pair window and the accuracy are static, so every design of one
 family and one pair of tooth counts is built with the same window (`window`) and runs in
@@ -74,6 +74,10 @@ def window(pairs: list) -> tuple[int, ...]:
     return tuple(range(min(ks), max(ks) + 1))
 
 
+def _take(x, i):
+    return np.asarray(x if i is None else x[i])
+
+
 def bad_fields(result, i=None) -> list[str]:
     """Names of the inexact fields of a `SimulationResult` (entry `i` of a batch) that are
     not finite. `tca.slice_te` and `tca.separation` are meaningful only where the slice
@@ -81,16 +85,13 @@ def bad_fields(result, i=None) -> list[str]:
     there only; impact fields are checked only where the search succeeded."""
     from jax.tree_util import keystr, tree_leaves_with_path
 
-    def take(x):
-        return np.asarray(x if i is None else x[i])
-
-    valid = take(result.tca.valid)
+    valid = _take(result.tca.valid, i)
     bad = []
     for path, leaf in tree_leaves_with_path(result):
         if not (hasattr(leaf, "dtype") and jnp.issubdtype(leaf.dtype, jnp.inexact)):
             continue
         name = keystr(path)
-        value = take(leaf)
+        value = _take(leaf, i)
         if name in (".tca.slice_te", ".tca.separation"):
             value = value[valid]
         if not np.all(np.isfinite(value)):
@@ -102,39 +103,29 @@ def missed_contacts(result, i=None) -> int:
     """Slices whose TCA has an unconverged candidate solve (`tca.unconverged`) where the
     contact matters: the binding slices, which fix the unloaded TE at their position, and,
     with an LTCA, the slices that carry load."""
-
-    def take(x):
-        return np.asarray(x if i is None else x[i])
-
-    unconverged = take(result.tca.unconverged) > 0
-    te, slice_te, valid = take(result.tca.transmission_error), take(result.tca.slice_te), take(result.tca.valid)
+    unconverged = _take(result.tca.unconverged, i) > 0
+    te, slice_te, valid = (_take(x, i) for x in (result.tca.transmission_error, result.tca.slice_te, result.tca.valid))
     scale = 1e-9 * (1.0 + np.max(np.abs(te)))
     matters = valid & (np.abs(slice_te - te[:, None, None]) <= scale)
     if result.ltca is not None:
-        loads = take(result.ltca.loads) > 0
+        loads = _take(result.ltca.loads, i) > 0
         matters[..., : loads.shape[-1]] |= loads
     return int(np.sum(unconverged & matters))
 
 
-def _modification(rng, module, face_width, length) -> np.ndarray:
-    """Uniform within `DesignSpace.seed001`'s bounds, relief lengths capped at the flank."""
+def _loaded(rng, pair, module, face_width):
+    """`(pair, y (mm), scene keywords)`: a modification uniform within
+    `DesignSpace.seed001`'s bounds (relief lengths capped at the active flank), f_pb and f_p
+    within ±0.001 m_n (ISO 1328 grades 5-7 at these modules), f_ma within ±0.002 b (mm),
+    and a torque up to twice the seed's 1000 N·m scaled to the same line load and pitch
+    radius ($T \\propto z_1 m_n^2 b$)."""
     low, high = bounds_mm(module, face_width)
     y = rng.uniform(low, high)
-    y[2:4] = np.minimum(y[2:4], length)
-    return y
-
-
-def _errors(rng, module, face_width) -> tuple[float, float, float]:
-    """f_pb, f_p within ±0.001 m_n (ISO 1328 grades 5-7 at these modules), f_ma within
-    ±0.002 b (mm)."""
-    return (float(rng.uniform(-1, 1) * 1e-3 * module), float(rng.uniform(-1, 1) * 1e-3 * module),
-            float(rng.uniform(-1, 1) * 2e-3 * face_width))
-
-
-def _torque_Nm(rng, teeth, module, face_width) -> float:
-    """Up to twice the seed's 1000 N·m scaled to the same line load and pitch radius
-    ($T \\propto z_1 m_n^2 b$)."""
-    return float(rng.uniform(0.0, 2.0) * SEED_TORQUE_NM * (teeth[0] / 29) * (module / 5) ** 2 * (face_width / 42))
+    y[2:4] = np.minimum(y[2:4], flank_length(pair))
+    torque = float(rng.uniform(0.0, 2.0) * SEED_TORQUE_NM * (pair.teeth[0] / 29) * (module / 5) ** 2 * (face_width / 42))
+    errors = (float(rng.uniform(-1, 1) * 1e-3 * module), float(rng.uniform(-1, 1) * 1e-3 * module),
+              float(rng.uniform(-1, 1) * 2e-3 * face_width))
+    return pair, y, dict(torque_Nm=torque, errors=errors)
 
 
 def _draw(rng, build, pairs=None, tries=200):
@@ -164,10 +155,7 @@ def random_involute(rng, teeth, pairs=None):
         pair = gj.InvoluteGearPair(teeth, module, float(rng.uniform(17.5, 25.0)), beta, face,
                                    tuple(float(x) for x in rng.uniform(-0.3, 0.6, 2)),
                                    addendum_coefficient=addendum, dedendum_coefficient=addendum + 0.25)
-        y = _modification(rng, module, face, flank_length(pair))
-        gj.FlankModification.from_vector(jnp.asarray(y)).check_fits(flank_length(pair), face)
-        kw = dict(torque_Nm=_torque_Nm(rng, teeth, module, face), errors=_errors(rng, module, face))
-        return pair, y, kw
+        return _loaded(rng, pair, module, face)
 
     return _draw(rng, build, pairs)
 
@@ -181,9 +169,7 @@ def random_curvilinear(rng, teeth=(20, 30), pairs=None):
         radius = float(rng.uniform(0.55, 5.0) * face)
         pair = gj.CurvilinearGearPair(teeth, module, float(rng.uniform(17.5, 25.0)), face, radius,
                                       tuple(float(x) for x in rng.uniform(-0.3, 0.6, 2)))
-        y = _modification(rng, module, face, flank_length(pair))
-        kw = dict(torque_Nm=_torque_Nm(rng, teeth, module, face), errors=_errors(rng, module, face))
-        return pair, y, kw
+        return _loaded(rng, pair, module, face)
 
     return _draw(rng, build, pairs)
 
@@ -267,10 +253,13 @@ def _programs():
 _FORWARD, _DERIVATIVE = _programs()
 
 
+KINDS = ("non-finite", "tca", "ltca", "impact")  # the failures `failures` sorts entries by
+
+
 def failures(result, start: int, stop: int) -> dict[str, list[int]]:
     """Entries [start, stop) of a batch by failure: non-finite values, failed LTCA or impact
     (where the scene ran them), TCA candidates unconverged where the contact matters."""
-    out = {"non-finite": [], "tca": [], "ltca": [], "impact": []}
+    out = {kind: [] for kind in KINDS}
     names = {stage: gj.enum_name(getattr(result, stage).result) for stage in ("ltca", "impact")
              if getattr(result, stage) is not None}
     for i in range(start, stop):
@@ -283,3 +272,23 @@ def failures(result, start: int, stop: int) -> dict[str, list[int]]:
         if "impact" in names and names["impact"][i] != "successful":
             out["impact"].append(i)
     return out
+
+
+def count_failures(results: dict[str, tuple]) -> dict[str, dict[str, list[int]]]:
+    """`failures` of named batches, `{name: (result, start, stop)}`, and their counts
+    printed (shown with `pytest -s`)."""
+    failed = {}
+    for name, (result, start, stop) in results.items():
+        failed[name] = failures(result, start, stop)
+        print(f"\n{name}: {stop - start} random designs; failed: " + ", ".join(f"{k} {len(v)}" for k, v in failed[name].items()))
+    return failed
+
+
+def failure_kinds(known: dict[str, str], kinds=KINDS) -> list:
+    """Parameters of a random-design test, one per kind of failure (`kinds`: those of the
+    stages the designs run); the kinds in `known` (kind: the measured failures) are strict
+    xfails, so they fail the suite once fixed. Open bugs, not accepted behaviour."""
+    import pytest
+
+    return [pytest.param(kind, marks=pytest.mark.xfail(strict=True, reason=known[kind])) if kind in known else kind
+            for kind in kinds]

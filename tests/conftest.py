@@ -1,7 +1,7 @@
 """Test configuration: float64 and strict dtype promotion, as the engine's reference.
 
-The command-line tests run `gearjax.cli.main` in-process, and the command enables JAX's
-persistent compilation cache; it goes to a new temporary directory of this process (each
+JAX's persistent compilation cache (which the command-line tests' in-process
+`gearjax.cli.main` would also use) goes to a new temporary directory of this process (each
 xdist worker has its own), never the user's cache and never one that another run, or the
 other worker, writes at the same time: JAX writes its cache entries in place, without a
 lock unless a size limit is set.
@@ -24,6 +24,11 @@ import gearjax  # noqa: F401, E402  (imported first: sets its XLA CPU flag befor
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
+# JAX's persistent compilation cache in this process's own directory, enabled before the
+# first compilation (later it would not take effect): the compiled programs of a test file
+# are dropped when the file ends (`_release_compiled_programs`), and a later file of the
+# same worker that compiles the same program again loads it from there.
+gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
 @pytest.fixture(scope="session")

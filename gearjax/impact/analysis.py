@@ -236,9 +236,8 @@ class _SearchState(eqx.Module):
 def _tolerances(ctx: _Context, dtype):
     """`(atol, rtol, tiny)`: the search's tolerances (`Accuracy.newton_atol/rtol` floored
     near machine precision) and the smallest slope $H'$ trusted for a Newton step."""
-    eps = float(jnp.finfo(dtype).eps)
-    acc = ctx.model.accuracy
-    return max(acc.newton_atol, 64 * eps), max(acc.newton_rtol, 16 * eps), 1e3 * eps
+    rtol, atol = ctx.model.accuracy.newton_tolerances(dtype)
+    return atol, rtol, 1e3 * float(jnp.finfo(dtype).eps)
 
 
 def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) -> _Search:

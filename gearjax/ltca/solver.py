@@ -59,6 +59,7 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, Bool, Float, Scalar
+from ..accuracy import floored_tolerances
 
 #: separations of points without a contact are replaced by this (mm): they take no load
 NO_CONTACT = 1.0
@@ -225,8 +226,8 @@ def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_step
     Args:
         problem: the position's data.
         rtol, atol: tolerances on the change of the loads between Newton steps, relative to
-            the largest load and in units of it (nonlinear laws only; floored at 16 machine
-            epsilons).
+            the largest load and in units of it (nonlinear laws only; floored near the
+            dtype's precision, `floored_tolerances`).
         max_steps: cap on the active-set steps.
     """
     dtype = problem.separation.dtype
@@ -237,8 +238,7 @@ def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_step
             loads=loads, gaps=problem.gaps(loads, rotation), rotation=rotation,
             converged=jnp.asarray(True), steps=jnp.asarray(0),
         )
-    eps = float(jnp.finfo(dtype).eps)
-    rtol, atol = max(rtol, 16 * eps), max(atol, 16 * eps)
+    rtol, atol = floored_tolerances(rtol, atol, dtype)
     frozen = jax.tree_util.tree_map(jax.lax.stop_gradient, problem)
     # start: the exact diagonal solution with each point's own compliance, the contact
     # law's tangent at the mean load included (so a rigid tooth with a contact law works)

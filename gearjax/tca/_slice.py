@@ -205,7 +205,7 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
         # tip where the edge candidate takes over.
         free = jnp.stack([selector[2] == 0, selector[1] == 0])
         u = sol.value[:2]
-        off_flank = jnp.any(free & ((u < active_lo - tol) | (u > active_hi + tol)))
+        off_flank = jnp.any(free & ~_within(u, (active_lo, active_hi), tol))
         return sol.value, success & relevant, relevant & ~success & ~off_flank
 
     return jax.vmap(solve)(_starts(problem), selectors, relevance(problem))

@@ -93,11 +93,8 @@ def tooth_contact_analysis(
     ks = jnp.asarray(pairs)
 
     if accuracy.tca_method == "surface":
-        # Tolerances floored near the dtype's precision (as the LTCA's and the impact
-        # search's): float32 cannot meet 1e-8, and a Newton solve that stops short of its
-        # tolerance by rounding alone would drop its contact, making the TE jump.
-        eps = float(jnp.finfo(jnp.result_type(phi)).eps)
-        solver = optx.Newton(rtol=max(accuracy.newton_rtol, 16 * eps), atol=max(accuracy.newton_atol, 64 * eps))
+        rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
+        solver = optx.Newton(rtol=rtol, atol=atol)
 
         def one(phi1, k, zz):
             return solve_slice(make_problem(pair, depth, k, zz, phi1), solver, accuracy.newton_max_steps)
