@@ -57,8 +57,16 @@ def _caches(args: argparse.Namespace):
     from .program_cache import program_cache
 
     if args.no_cache:
-        with program_cache(enabled=False):
-            yield
+        # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);
+        # JAX decides at the process's first compilation, so a started cache stays
+        enabled = jax.config.jax_enable_compilation_cache
+        if not _cache_started():
+            jax.config.update("jax_enable_compilation_cache", False)
+        try:
+            with program_cache(enabled=False):
+                yield
+        finally:
+            jax.config.update("jax_enable_compilation_cache", enabled)
         return
     if not _cache_started():
         enable_compilation_cache(programs=False)

@@ -1,10 +1,13 @@
 """Test configuration: float64 and strict dtype promotion, as the engine's reference.
 
-JAX's persistent compilation cache (which the command-line tests' in-process
-`gearjax.cli.main` would also use) goes to a new temporary directory of this process (each
-xdist worker has its own), never the user's cache and never one that another run, or the
-other worker, writes at the same time: JAX writes its cache entries in place, without a
-lock unless a size limit is set.
+One JAX persistent compilation cache for the whole test run: the pytest process (xdist's
+controller) creates a new temporary directory and removes it when it ends; its xdist
+workers, the notebook kernels and every subprocess the tests start (command-line runs, the
+killed GA and sweep runs) inherit it through the environment, so a program that one of
+them compiled is loaded, not compiled again, by the others (notebook 06 and the killed GA
+run compile the programs of `tests/test_optimize.py`). Never the user's cache. Concurrent
+writers are safe because a size limit is set: JAX then reads and writes its entries under a
+file lock (`filelock`, a test dependency for that reason).
 """
 
 import atexit
@@ -12,23 +15,33 @@ import os
 import shutil
 import tempfile
 
-# Set in every process (an xdist worker inherits the controller's environment, and must not
-# share its directory), removed when the process ends.
-os.environ["GEARJAX_CACHE_DIR"] = tempfile.mkdtemp(prefix="gearjax-test-cache-")
-atexit.register(shutil.rmtree, os.environ["GEARJAX_CACHE_DIR"], ignore_errors=True)
+if "GEARJAX_TEST_CACHE_DIR" not in os.environ:  # the first process of the run owns it
+    os.environ["GEARJAX_TEST_CACHE_DIR"] = tempfile.mkdtemp(prefix="gearjax-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["GEARJAX_TEST_CACHE_DIR"], ignore_errors=True)
+# read by gearjax's commands (`gearjax.cache`) and, in every process, by JAX itself
+os.environ["GEARJAX_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
+os.environ["JAX_COMPILATION_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
+os.environ["JAX_COMPILATION_CACHE_MAX_SIZE"] = str(64 * 2**30)  # a limit, so that JAX locks
+os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0.2"  # gearjax.cache.MIN_COMPILE_TIME_S
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
-import gearjax  # noqa: F401, E402  (imported first: sets its XLA CPU flag before backends start)
+import gearjax  # noqa: E402  (imported first: sets its XLA CPU flag before backends start)
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
-# JAX's persistent compilation cache in this process's own directory, enabled before the
-# first compilation (later it would not take effect): the compiled programs of a test file
-# are dropped when the file ends (`_release_compiled_programs`), and a later file of the
-# same worker that compiles the same program again loads it from there.
+# enabled before the first compilation (later it would not take effect): the compiled
+# programs of a test file are dropped when the file ends (`_release_compiled_programs`),
+# and a later file, or another process, that compiles the same program loads it from there.
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
+
+
+def pytest_collection_modifyitems(config, items):
+    """The notebooks run last: they compile the programs of the test files (notebook 05
+    those of `test_impact.py`, 06 those of `test_optimize.py`, ...), which by then are in the
+    run's compilation cache. xdist (`--dist loadfile`) hands the files out in this order."""
+    items.sort(key=lambda item: item.path.name == "test_notebooks.py")
 
 
 @pytest.fixture(scope="session")

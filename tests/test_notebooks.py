@@ -1,6 +1,5 @@
 """Every notebook runs top to bottom (so none can rot)."""
 
-import os
 from pathlib import Path
 
 import nbformat
@@ -12,11 +11,9 @@ NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_executes(path, tmp_path, monkeypatch):
-    # The kernels (processes of their own) share this worker's persistent compilation
-    # cache, one notebook at a time: a program that another notebook or test file of the
-    # worker compiled is loaded instead of compiled again.
-    monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", os.environ["GEARJAX_CACHE_DIR"])
+def test_notebook_executes(path, tmp_path):
+    # The kernels inherit the test run's persistent compilation cache (`conftest.py`): a
+    # program that another notebook, test file or worker compiled is loaded, not compiled.
     nb = nbformat.read(path, as_version=4)
     NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
     errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []) if o.get("output_type") == "error"]
