@@ -17,7 +17,7 @@ per call) at the `fast` preset: here the forward program with TCA, LTCA and impa
 forward-mode derivative program of TCA + LTCA (`_cases.derivatives`: `jax.jvp` along the
 all-ones direction of $(y_1..y_6, T)$, which any NaN or infinite partial derivative would
 turn NaN; a fraction of the reverse-mode program's compile time). The impact force's own
-gradient is checked on both sides of the regime switch in `test_impact.py`.
+gradient is checked on both sides of the regime switch in `test_optimize.py` (`sensitivities`).
 """
 
 import math

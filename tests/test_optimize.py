@@ -11,6 +11,7 @@ import subprocess
 import sys
 import textwrap
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -192,19 +193,34 @@ def test_gradient_descent_lowers_the_objective_from_a_poor_start(objective, spac
     assert result.gradient_evaluations == result.evaluations == STARTS * result.steps
 
 
-def test_sensitivities_agree_with_the_energy_method_and_the_batch_gradient(objective, space, designs):
-    design = designs[0]
-    s = go.sensitivities(objective, design, space)
-    impact = _simulate(objective, design).impact
-    assert s["objective"] == pytest.approx(float(impact.force), rel=1e-9)
-    n = float(impact.stiffness.exponent)
-    # F_s = ((n+1)/2 m v^2)^(n/(n+1)) K^(1/(n+1)) with v proportional to the speed
-    assert s["speed"]["log_derivative"] == pytest.approx(2 * n / (n + 1), rel=1e-6)
+def test_sensitivities_agree_with_the_energy_method_the_batch_gradient_and_differences(objective, space, designs,
+                                                                                        regimes):
+    """`sensitivities` (one reverse-mode program of J with respect to the design, the loads,
+    the speed and the errors) on both sides of the surface/edge switch: the paper's optimum
+    strikes with the gear's tip edge, the long deep relief flank on flank (`regimes`)."""
+    assert regimes == ["edge", "surface"]
     _, grads = _batch_value_and_grad(objective, space, np.asarray(space.to_unit(designs[:2])))
-    per_width = np.array([e["per_bound_width"] for e in s["parameters"].values()])
-    np.testing.assert_allclose(per_width, np.asarray(grads[0]), rtol=1e-6)
-    assert set(s["errors"]) == {"base_pitch_deviation_um", "pitch_deviation_um", "misalignment_um"}
-    assert all(np.isfinite(v) for v in s["errors"].values())
+    # central differences in the torque, the two designs side by side in one batch
+    rows = np.repeat(designs[:2], POPULATION // 2, axis=0)
+    h = 1e-4 * float(objective.torques[0])  # N·mm
+
+    def at_torque(torque):
+        return np.asarray(_batch_objective(eqx.tree_at(lambda o: o.torques, objective, jnp.array([torque])), rows))
+
+    t = float(objective.torques[0])
+    central = (at_torque(t + h) - at_torque(t - h))[:: POPULATION // 2] / (2 * h) * 1e3  # per N·m
+    for k in range(2):
+        s = go.sensitivities(objective, designs[k], space)
+        impact = _simulate(objective, designs[k]).impact
+        assert s["objective"] == pytest.approx(float(impact.force), rel=1e-9)
+        n = float(impact.stiffness.exponent)
+        # F_s = ((n+1)/2 m v^2)^(n/(n+1)) K^(1/(n+1)) with v proportional to the speed
+        assert s["speed"]["log_derivative"] == pytest.approx(2 * n / (n + 1), rel=1e-6)
+        per_width = np.array([e["per_bound_width"] for e in s["parameters"].values()])
+        np.testing.assert_allclose(per_width, np.asarray(grads[k]), rtol=1e-6)
+        assert s["loads"][0]["gradient_per_Nm"] == pytest.approx(central[k], rel=1e-3)
+        assert set(s["errors"]) == {"base_pitch_deviation_um", "pitch_deviation_um", "misalignment_um"}
+        assert all(np.isfinite(v) for v in s["errors"].values())
     assert "speed" in go.sensitivity_table(s)
 
 
