@@ -27,6 +27,17 @@ entries are keyed by the program, the JAX version and the backend, so a new JAX 
 a stale program; delete the directory to reclaim space. Both caches load what they find
 there, so the directory must be writable only by its user.
 
+**Not for reverse-mode gradients of the impact force** (jaxlib 0.10.2): such an executable
+(e.g. the optimiser's `vmap(value_and_grad)` of the seed 001 objective at `fast`) is written
+to the cache, but loading it in a later process crashes that process with a segmentation
+fault: LLVM's JIT linker, linking the deserialized object files, recurses about 1 000 levels
+deep (8 000 stack frames) in one of XLA's thread-pool threads and overflows its stack; neither
+a larger `ulimit -s` nor `--xla_cpu_parallel_codegen_split_count=1` avoids it
+(`python tools/check_cache_gradient_load.py` reproduces it in two fresh processes). Forward
+programs (`simulate`, the sweeps, the GA's batch) load fine. So `gearjax optimize` runs
+without the persistent cache, and a process that computes such gradients should not enable
+it (or should use a directory that no later gradient run reads).
+
 On a 2-core CPU shared with other jobs (load 4-7; rough), a warm `gearjax run` of the
 default scene took 8-16 s instead of 31-57 s without the program cache; what remains is
 mostly loading the compiled executable from JAX's cache (2-7 s: the default scene's

@@ -56,7 +56,11 @@ def _caches(args: argparse.Namespace):
     from .cache import _cache_started, enable_compilation_cache
     from .program_cache import program_cache
 
-    if args.no_cache:
+    # `optimize` never uses JAX's persistent cache: with jaxlib 0.10.2 an executable of the
+    # reverse-mode gradient of the impact force, loaded from it in a later process, crashes
+    # that process (`gearjax.cache`, `tools/check_cache_gradient_load.py`); the command
+    # compiles its one or two programs once per run, so the cache would save little there.
+    if args.no_cache or args.command == "optimize":
         # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);
         # JAX decides at the process's first compilation, so a started cache stays
         enabled = jax.config.jax_enable_compilation_cache
@@ -150,7 +154,8 @@ def main(argv: list[str] | None = None) -> int:
         "--cross-check", action="store_true",
         help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
     )
-    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section)")
+    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section); "
+                                          "compiles its programs in every run (no persistent cache, see gearjax.cache)")
     opt.add_argument("scene", nargs="?", help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
     opt.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
     opt.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")

@@ -2,10 +2,11 @@
 
 One JAX persistent compilation cache for the whole test run: the pytest process (xdist's
 controller) creates a new temporary directory and removes it when it ends; its xdist
-workers, the notebook kernels and every subprocess the tests start (command-line runs, the
-killed GA and sweep runs) inherit it through the environment, so a program that one of
-them compiled is loaded, not compiled again, by the others (notebook 06 and the killed GA
-run compile the programs of `tests/test_optimize.py`). Never the user's cache. Concurrent
+workers and every subprocess the tests start (command-line runs, the killed GA and sweep
+runs) inherit it through the environment, so a program that one of them compiled is
+loaded, not compiled again, by the others (the killed GA run loads the batch program of
+`tests/test_optimize.py`). Not the notebook kernels (`test_notebooks.py` says why). Never
+the user's cache. Concurrent
 writers are safe because a size limit is set: JAX then reads and writes its entries under a
 file lock (`filelock`, a test dependency for that reason).
 """
@@ -35,13 +36,6 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 # programs of a test file are dropped when the file ends (`_release_compiled_programs`),
 # and a later file, or another process, that compiles the same program loads it from there.
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
-
-
-def pytest_collection_modifyitems(config, items):
-    """The notebooks run last: they compile the programs of the test files (notebook 05
-    those of `test_impact.py`, 06 those of `test_optimize.py`, ...), which by then are in the
-    run's compilation cache. xdist (`--dist loadfile`) hands the files out in this order."""
-    items.sort(key=lambda item: item.path.name == "test_notebooks.py")
 
 
 @pytest.fixture(scope="session")

@@ -188,3 +188,30 @@ def test_reproduce_dca_json(capsys):
     for t in ("table1", "table2"):
         for paper, ours in zip(out["tables_paper_units"][t]["paper"], out["tables_paper_units"][t]["gearjax"]):
             assert ours == pytest.approx(paper, rel=3e-4)
+
+
+def test_optimize_runs_without_the_persistent_cache_and_run_with_it(tmp_path):
+    """In a fresh process (where JAX has not yet decided on its cache), `optimize` turns
+    JAX's persistent compilation cache off for its run (a cached impact-gradient executable
+    crashes the process that loads it, `gearjax.cache`), `run` turns it on; and each
+    command leaves the setting as it found it."""
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "import argparse, jax\n"
+        "from gearjax.cli import _caches\n"
+        "for command in ('optimize', 'run'):\n"
+        "    before = jax.config.jax_enable_compilation_cache\n"
+        "    with _caches(argparse.Namespace(command=command, no_cache=False)):\n"
+        "        print(command, jax.config.jax_enable_compilation_cache, jax.config.jax_compilation_cache_dir)\n"
+        "    assert jax.config.jax_enable_compilation_cache == before\n"
+    )
+    env = dict(os.environ, GEARJAX_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    assert lines[0].split()[:2] == ["optimize", "False"]
+    assert lines[1].split() == ["run", "True", str(tmp_path / "cache")]
