@@ -6,9 +6,8 @@ workers and every subprocess the tests start (command-line runs, the killed GA a
 runs) inherit it through the environment, so a program that one of them compiled is
 loaded, not compiled again, by the others (the killed GA run loads the batch program of
 `tests/test_optimize.py`). Not the notebook kernels (`test_notebooks.py` says why). Never
-the user's cache. Concurrent
-writers are safe because a size limit is set: JAX then reads and writes its entries under a
-file lock (`filelock`, a test dependency for that reason).
+the user's cache. Concurrent writers are safe because a size limit is set: JAX then reads
+and writes its entries under a file lock (`filelock`, a test dependency for that reason).
 """
 
 import atexit

@@ -144,7 +144,7 @@ def test_cli_sweep_writes_the_grid_as_json_npz_and_plots(impact_grid, tmp_path, 
     written = json.loads((out / "sweep.json").read_text())["sweep"]
     assert printed["torque_Nm"] == written["torque_Nm"] == GRID[0]
     assert written["speed_rpm"] == pytest.approx(GRID[1], rel=1e-15)
-    np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-10)
+    np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-12)
     assert written["impact_regime"] == [["surface", "surface"]] + [["edge", "edge"]] * 6
     assert len(written["lte_peak_to_peak_um"]) == 7 and all(v > 0 for v in written["lte_peak_to_peak_um"])
     arrays = np.load(out / "sweep.npz")
