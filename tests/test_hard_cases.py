@@ -208,8 +208,6 @@ def random_failures(groups):
 
 # Measured on these 400 designs at the `fast` preset (2026-11-25), open in issue #12:
 RANDOM_KNOWN = {
-    "tca": "a TCA flank candidate stalls (a Newton cycle between two iterates) on the active flank "
-           "of a loaded slice next to its edge contact, so a contact may be missed: 6 of 400 designs",
     "impact": "first-contact search unconverged in 20 of 400 designs (29/71): the gap H jumps "
               "where a face-end slice's flank contact becomes valid already ahead of the edge "
               "contact (a tip/face-end corner contact that the TCA does not model; seen on "

@@ -85,8 +85,6 @@ def random_failures(curvilinear):
 # Measured on these 260 designs at the `fast` preset (2026-11-25), open in issue #12 (the
 # same two failures as the involute designs', see test_hard_cases.py):
 RANDOM_KNOWN = {
-    "tca": "a TCA flank candidate stalls on the active flank of a loaded slice: 4 of 260 "
-           "curvilinear designs",
     "impact": "first-contact search unconverged (the gap H jumps): 2 of 260 curvilinear designs",
 }
 

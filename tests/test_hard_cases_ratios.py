@@ -67,8 +67,9 @@ def random_failures(groups):
 # Measured on these designs at the `fast` preset (2026-11-25), open in issue #12 (the same
 # failure as in test_hard_cases.py):
 RANDOM_KNOWN = {
-    "tca": "a TCA flank candidate stalls (a Newton cycle) on the active flank of a loaded slice next "
-           "to its edge contact, so a contact may be missed: 1 of 150 (40/40), 8 of 150 (17/170) designs",
+    "tca": "a TCA candidate solve fails on the active flank of a loaded slice, Newton and its damped "
+           "fallback both (a contact may be missed): 2 of 150 designs on 17/170 (8 before the "
+           "fallback), 0 of 150 on 40/40 (1 before)",
 }
 
 

@@ -252,3 +252,22 @@ def test_plane_of_action_fast_path_is_second_order_accurate(seed_pair):
     predicted = 0.5 * slope**2 / (k + curvature) * cos_bb  # back to the normal direction
     np.testing.assert_allclose(excess, predicted, rtol=0.03, atol=2e-6)
     assert excess.max() > 2e-4  # a real effect: 0.2 um and more near the root
+
+
+def test_safeguarded_newton_converges_where_newton_diverges():
+    """f(x) = arctan x from x = 1.5: plain Newton's steps overshoot further each time
+    (1.5 → -1.69 → 2.32 → ...) and never converge; `SafeguardedNewton` (the TCA's fallback)
+    backtracks on |f|², which has no other minimum, and reaches the root 0."""
+    import optimistix as optx
+
+    from gearjax._newton import SafeguardedNewton
+
+    def f(y, args):
+        return jnp.arctan(y)
+
+    y0 = jnp.full(1, 1.5)
+    newton = optx.root_find(f, optx.Newton(rtol=1e-12, atol=1e-12), y0, max_steps=40, throw=False)
+    assert newton.result != optx.RESULTS.successful
+    sol = optx.root_find(f, SafeguardedNewton(rtol=1e-12, atol=1e-12), y0, max_steps=40, throw=False)
+    assert sol.result == optx.RESULTS.successful
+    assert abs(float(sol.value[0])) < 1e-12

@@ -21,10 +21,14 @@ continuous, and (envelope theorem) so is its derivative with respect to the pini
 
 Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
-`args`; failures are reported (`converged`), never thrown.
+`args`; the analysis solves the candidates whose Newton solve failed again with a damped
+Newton (`gearjax._newton.SafeguardedNewton`); failures are reported (`converged`), never
+thrown.
 """
 
 from __future__ import annotations
+
+import functools as ft
 
 import equinox as eqx
 import jax
@@ -108,8 +112,9 @@ class SliceContact(eqx.Module):
         kind: index of the touching candidate in `CANDIDATES` (0 flank, 1 gear-tip edge,
             2 pinion-tip edge); `contact_kind` turns it into a `ContactKind`.
         valid: some candidate converged on the active flanks.
-        unconverged: number of relevant candidates whose Newton solve failed with its last
-            iterate on the active flanks (0 to 3).
+        unconverged: number of relevant candidates whose Newton solve, and then the
+            analysis's damped fallback (`tca.analysis._retry_failed`), failed with the
+            last iterate on the active flanks (0 to 3).
     """
 
     offset: Float[Array, "..."]
@@ -176,44 +181,48 @@ def relevance(problem: SliceProblem):
     return jnp.stack([flank, gear_edge, pinion_edge])
 
 
-def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
-    """Solve the three candidate problems of one slice: values (3, 3), converged (3,)
-    (False for candidates screened out by `relevance`) and failed (3,) (relevant but not
-    converged)."""
+def _solve(problem, solver, max_steps, y0, selector, relevant):
+    """One candidate solve: its value, converged (successful and relevant), and failed
+    (relevant, unsuccessful, last iterate on the active flanks: where the solve may have
+    missed a contact; an iterate off them, on a free coordinate, is heading for a root
+    that `select_contact` would reject anyway: held at the domain's bound at the base
+    circle, or creeping (a near-double root) beyond a tip where the edge candidate takes
+    over). Iterates are bounded to the flanks' parameter domain."""
     pair = problem.pair
     dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
     one = jnp.ones_like(dom1[0])
-    options = dict(
-        lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one])
+    options = dict(lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one]))
+    sol = optx.root_find(
+        _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
+        max_steps=max_steps, throw=False, adjoint=ADJOINT,
     )
-    selectors = jnp.eye(3, dtype=one.dtype)
+    success = sol.result == optx.RESULTS.successful
     (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
-    active_lo, active_hi = jnp.stack([lo1, lo2]), jnp.stack([hi1, hi2])
-    tol = _parameter_tolerance(active_hi)
-
-    def solve(y0, selector, relevant):
-        sol = optx.root_find(
-            _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
-            max_steps=max_steps, throw=False, adjoint=ADJOINT,
-        )
-        success = sol.result == optx.RESULTS.successful
-        # A failure counts where the solve may have missed a contact: where its last
-        # iterate lies on the active flanks. An iterate off them (on a free coordinate:
-        # both for the flank, u1 for the gear-tip edge, u2 for the pinion-tip edge) is
-        # heading for a root that `select_contact` would reject anyway: held at the
-        # domain's bound at the base circle, or creeping (a near-double root) beyond a
-        # tip where the edge candidate takes over.
-        free = jnp.stack([selector[2] == 0, selector[1] == 0])
-        u = sol.value[:2]
-        off_flank = jnp.any(free & ~_within(u, (active_lo, active_hi), tol))
-        return sol.value, success & relevant, relevant & ~success & ~off_flank
-
-    return jax.vmap(solve)(_starts(problem), selectors, relevance(problem))
+    active_hi = jnp.stack([hi1, hi2])
+    free = jnp.stack([selector[2] == 0, selector[1] == 0])
+    on_flanks = _within(sol.value[:2], (jnp.stack([lo1, lo2]), active_hi), _parameter_tolerance(active_hi))
+    off_flank = jnp.any(free & ~on_flanks)
+    return sol.value, success & relevant, relevant & ~success & ~off_flank
 
 
-def select_contact(problem: SliceProblem, values, converged, failed) -> SliceContact:
+def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
+    """Solve the three candidate problems of one slice: values (3, 3), converged (3,)
+    (False for candidates screened out by `relevance`) and failed (3,) (relevant but not
+    converged, last iterate on the active flanks)."""
+    selectors = jnp.eye(3, dtype=problem.z.dtype)
+    return jax.vmap(ft.partial(_solve, problem, solver, max_steps))(_starts(problem), selectors, relevance(problem))
+
+
+def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int):
+    """Solve candidate `candidate` (index into `CANDIDATES`) of one slice again from its
+    start, with another solver (the TCA's fallback for failed Newton solves): its value,
+    converged and failed as in `solve_candidates`."""
+    return _solve(problem, solver, max_steps, _starts(problem)[candidate], jnp.eye(3, dtype=problem.z.dtype)[candidate],
+                  jnp.asarray(True))
+
+
+def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceContact:
     """Keep the first contact among the valid candidates (largest offset)."""
-    pair = problem.pair
     lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
     tol = _parameter_tolerance(lim1[1])
     ok = converged & _within(values[:, 0], lim1, tol) & _within(values[:, 1], lim2, tol)
@@ -233,7 +242,7 @@ def select_contact(problem: SliceProblem, values, converged, failed) -> SliceCon
 def solve_slice(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int) -> SliceContact:
     """First contact of one slice (general TCA)."""
     values, converged, failed = solve_candidates(problem, solver, max_steps)
-    return select_contact(problem, values, converged, failed)
+    return select_contact(problem.pair, values, converged, failed)
 
 
 def make_problem(pair, depth, pair_index, z, pinion_angle) -> SliceProblem:

@@ -26,6 +26,7 @@ Two methods (`Accuracy.tca_method`):
 
 from __future__ import annotations
 
+import functools as ft
 import math
 
 import jax
@@ -34,11 +35,21 @@ import numpy as np
 import optimistix as optx
 
 from .._custom_types import Array, Float
+from .._newton import SafeguardedNewton
 from .._numerics import as_float, rotate2
 from ..accuracy import Accuracy
 from ..geometry._base import AbstractGearPair
 from ..geometry.depth import FlankDepth
-from ._slice import FLANK, SliceContact, _contact_residual, contact_kind, make_problem, solve_slice
+from ._slice import (
+    FLANK,
+    SliceContact,
+    _contact_residual,
+    contact_kind,
+    make_problem,
+    select_contact,
+    solve_again,
+    solve_candidates,
+)
 from .grid import face_slices, pair_window, positions
 from .peak import explicit_peak_correction, peak_correction
 from .result import TCAResult, _tca_result, merge_zones
@@ -92,13 +103,18 @@ def tooth_contact_analysis(
     z, width = face_slices(pair, accuracy)
     ks = jnp.asarray(pairs)
 
+    grid = lambda f: jax.vmap(jax.vmap(jax.vmap(f, (None, None, 0)), (None, 0, None)), (0, None, None))  # noqa: E731
     if accuracy.tca_method == "surface":
         rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
-        solver = optx.Newton(rtol=rtol, atol=atol)
+        steps = accuracy.newton_max_steps
 
         def one(phi1, k, zz):
-            return solve_slice(make_problem(pair, depth, k, zz, phi1), solver, accuracy.newton_max_steps)
+            return solve_candidates(make_problem(pair, depth, k, zz, phi1), optx.Newton(rtol=rtol, atol=atol), steps)
 
+        candidates = _retry_failed(pair, depth, phi, ks, z, grid(one)(phi, ks, z), SafeguardedNewton(rtol=rtol, atol=atol),
+                                   FALLBACK_STEPS * steps)
+        contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, pair))))(*candidates)
+        return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, True)
     else:
         if not pair.conjugate_slices:
             raise ValueError(
@@ -109,10 +125,41 @@ def tooth_contact_analysis(
         def one(phi1, k, zz):
             return _plane_of_action_slice(pair, depth, k, zz, phi1)
 
-    contact = jax.vmap(jax.vmap(jax.vmap(one, (None, None, 0)), (None, 0, None)), (0, None, None))(phi, ks, z)
-    return _assemble(
-        pair, depth, phi, ks, z, width, contact, accuracy.face_slices, accuracy.tca_method == "surface"
-    )
+    return _assemble(pair, depth, phi, ks, z, width, grid(one)(phi, ks, z), accuracy.face_slices, False)
+
+
+#: steps of the fallback solver per Newton step allowed (`Accuracy.newton_max_steps`)
+FALLBACK_STEPS = 4
+
+
+def fallback_capacity(candidates: int) -> int:
+    """Failed candidate solves retried per analysis: one in 64 of all, at least 32 (a
+    fixed size, so the program's shapes stay static)."""
+    return min(candidates, max(32, candidates // 64))
+
+
+def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
+    """Solve the failed candidates of a (positions, pairs, slices, 3) grid again with
+    `solver` (`SafeguardedNewton`): plain Newton can cycle where a relief's curvature jumps
+    inside the contact's reach (issue #12: 6 of 400 random 29/71 designs missed loaded
+    contacts at `fast`). The failures are gathered into a fixed number of problems
+    (`fallback_capacity`; failures beyond it stay failed), solved from their starts and
+    scattered back, so the fallback costs a few dozen solves whatever the grid's size, and
+    every candidate Newton solved keeps its value."""
+    values, converged, failed = candidates
+    shape = failed.shape
+    (index,) = jnp.nonzero(failed.reshape(-1), size=fallback_capacity(failed.size), fill_value=-1)
+    a, b, c, kind = jnp.unravel_index(jnp.maximum(index, 0), shape)
+
+    def again(a, b, c, kind):
+        return solve_again(make_problem(pair, depth, ks[b], z[c], phi[a]), kind, solver, max_steps)
+
+    value, ok, still = jax.vmap(again)(a, b, c, kind)
+    taken = index >= 0
+    # Padding entries (index -1) scatter out of bounds and are dropped.
+    target = jnp.where(taken, index, failed.size)
+    scatter = lambda full, part: full.reshape(-1, *full.shape[len(shape):]).at[target].set(part, mode="drop").reshape(full.shape)  # noqa: E731
+    return scatter(values, value), scatter(converged, ok & taken), scatter(failed, still & taken)
 
 
 def _plane_of_action_slice(pair, depth, k, z, phi1) -> SliceContact:
