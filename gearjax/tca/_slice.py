@@ -213,12 +213,13 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     return jax.vmap(ft.partial(_solve, problem, solver, max_steps))(_starts(problem), selectors, relevance(problem))
 
 
-def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int):
+def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int, relevant=True):
     """Solve candidate `candidate` (index into `CANDIDATES`) of one slice again from its
     start, with another solver (the TCA's fallback for failed Newton solves): its value,
-    converged and failed as in `solve_candidates`."""
+    converged and failed as in `solve_candidates`. `relevant=False` (a padding entry of a
+    fixed-size batch) solves the trivial problem $y = y_0$ in one step."""
     return _solve(problem, solver, max_steps, _starts(problem)[candidate], jnp.eye(3, dtype=problem.z.dtype)[candidate],
-                  jnp.asarray(True))
+                  jnp.asarray(relevant))
 
 
 def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceContact:

@@ -150,12 +150,14 @@ def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
     shape = failed.shape
     (index,) = jnp.nonzero(failed.reshape(-1), size=fallback_capacity(failed.size), fill_value=-1)
     a, b, c, kind = jnp.unravel_index(jnp.maximum(index, 0), shape)
-
-    def again(a, b, c, kind):
-        return solve_again(make_problem(pair, depth, ks[b], z[c], phi[a]), kind, solver, max_steps)
-
-    value, ok, still = jax.vmap(again)(a, b, c, kind)
     taken = index >= 0
+
+    def again(a, b, c, kind, taken):
+        return solve_again(make_problem(pair, depth, ks[b], z[c], phi[a]), kind, solver, max_steps, taken)
+
+    # Padding entries solve a trivial problem, so that a grid without failures costs the
+    # fallback one step, not its whole step budget.
+    value, ok, still = jax.vmap(again)(a, b, c, kind, taken)
     # Padding entries (index -1) scatter out of bounds and are dropped.
     target = jnp.where(taken, index, failed.size)
     scatter = lambda full, part: full.reshape(-1, *full.shape[len(shape):]).at[target].set(part, mode="drop").reshape(full.shape)  # noqa: E731
