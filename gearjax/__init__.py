@@ -21,6 +21,7 @@ from ._solution import (
 )
 from .accuracy import Accuracy as Accuracy
 from .cache import enable_compilation_cache as enable_compilation_cache
+from .cache import exclude_from_persistent_cache as exclude_from_persistent_cache
 from .geometry import (
     AbstractFlankPair as AbstractFlankPair,
     AbstractGearPair as AbstractGearPair,

@@ -27,16 +27,19 @@ entries are keyed by the program, the JAX version and the backend, so a new JAX 
 a stale program; delete the directory to reclaim space. Both caches load what they find
 there, so the directory must be writable only by its user.
 
-**Not for reverse-mode gradients of the impact force** (jaxlib 0.10.2): such an executable
-(e.g. the optimiser's `vmap(value_and_grad)` of the seed 001 objective at `fast`) is written
-to the cache, but loading it in a later process crashes that process with a segmentation
-fault: LLVM's JIT linker, linking the deserialized object files, recurses about 1 000 levels
-deep (8 000 stack frames) in one of XLA's thread-pool threads and overflows its stack; neither
-a larger `ulimit -s` nor `--xla_cpu_parallel_codegen_split_count=1` avoids it
-(`python tools/check_cache_gradient_load.py` reproduces it in two fresh processes). Forward
-programs (`simulate`, the sweeps, the GA's batch) load fine. So `gearjax optimize` runs
-without the persistent cache, and a process that computes such gradients should not enable
-it (or should use a directory that no later gradient run reads).
+**Reverse-mode gradients of the impact force stay out of JAX's cache** (jaxlib 0.10.2): such
+an executable (e.g. the optimiser's batched value and gradient of the seed 001 objective at
+`fast`) can be written to the cache, but loading it in a later process crashes that process
+with a segmentation fault: LLVM's JIT linker, linking the deserialized object files, recurses
+about 1 000 levels deep (8 000 stack frames) in one of XLA's thread-pool threads and
+overflows its stack; neither a larger `ulimit -s` nor `--xla_cpu_parallel_codegen_split_count=1`
+avoids it. Forward programs (`simulate`, the sweeps, the GA's batch) load fine. gearjax's own
+gradient program (`gearjax.optimize`: gradient descent and `sensitivities` share it) calls
+`exclude_from_persistent_cache`, so it is compiled in every process and never loaded, and
+`gearjax optimize` uses the cache for everything else; `python tools/check_cache_gradient_load.py`
+runs it in two fresh processes with one cache and shows both exit normally. A gradient
+program of your own (`jax.grad` of `simulate`'s impact force) is written like any other:
+call `exclude_from_persistent_cache()` inside it, or keep such a process off the cache.
 
 On a 2-core CPU shared with other jobs (load 4-7; rough), a warm `gearjax run` of the
 default scene took 8-16 s instead of 31-57 s without the program cache; what remains is
@@ -110,6 +113,23 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, programs:
 
         enable_program_cache(directory / PROGRAMS_SUBDIR)
     return directory
+
+
+def _do_nothing() -> None:
+    return None
+
+
+def exclude_from_persistent_cache() -> None:
+    """Inside a function being traced for `jit`: keep its compiled program out of JAX's
+    persistent compilation cache (it is compiled again in every process, never loaded).
+
+    It adds a host callback that does nothing (`jax.debug.callback`, an effect, so it is
+    never removed): JAX does not write an executable that has host callbacks. For programs
+    whose cached executable cannot be loaded back (reverse-mode gradients of the impact
+    force with jaxlib 0.10.2, see this module's documentation). The callback costs one call
+    into Python per execution of the program (microseconds).
+    """
+    jax.debug.callback(_do_nothing)
 
 
 def _cache_started() -> bool:

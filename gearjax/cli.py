@@ -56,11 +56,9 @@ def _caches(args: argparse.Namespace):
     from .cache import _cache_started, enable_compilation_cache
     from .program_cache import program_cache
 
-    # `optimize` never uses JAX's persistent cache: with jaxlib 0.10.2 an executable of the
-    # reverse-mode gradient of the impact force, loaded from it in a later process, crashes
-    # that process (`gearjax.cache`, `tools/check_cache_gradient_load.py`); the command
-    # compiles its one or two programs once per run, so the cache would save little there.
-    if args.no_cache or args.command == "optimize":
+    # `optimize`'s gradient program keeps itself out of JAX's cache (`gearjax.cache`: with
+    # jaxlib 0.10.2 it could not be loaded back); its GA batch and `simulate` are cached
+    if args.no_cache:
         # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);
         # JAX decides at the process's first compilation, so a started cache stays
         enabled = jax.config.jax_enable_compilation_cache
@@ -155,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
     )
     opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section); "
-                                          "compiles its programs in every run (no persistent cache, see gearjax.cache)")
+                                          "its gradient program is compiled in every run (kept out of the persistent cache, see gearjax.cache)")
     opt.add_argument("scene", nargs="?", help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
     opt.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
     opt.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")

@@ -5,7 +5,7 @@ controller) creates a new temporary directory and removes it when it ends; its x
 workers and every subprocess the tests start (command-line runs, the killed GA and sweep
 runs) inherit it through the environment, so a program that one of them compiled is
 loaded, not compiled again, by the others (the killed GA run loads the batch program of
-`tests/test_optimize.py`). Not the notebook kernels (`test_notebooks.py` says why). Never
+`tests/test_optimize.py`), and so do the notebook kernels (`test_notebooks.py`). Never
 the user's cache. Concurrent writers are safe because a size limit is set: JAX then reads
 and writes its entries under a file lock (`filelock`, a test dependency for that reason).
 """

@@ -262,3 +262,40 @@ def test_the_command_leaves_the_process_settings_as_they_were(tmp_path, capsys):
     assert program_cache.program_cache_dir() is None  # the command's own settings are gone
     assert jax.config.jax_persistent_cache_min_compile_time_secs == threshold
     capsys.readouterr()
+
+
+def test_an_excluded_program_is_never_written_to_the_persistent_cache(tmp_path):
+    """`exclude_from_persistent_cache` (gearjax's gradient program, whose cached executable
+    crashed the process that loaded it): of two programs compiled in a fresh process with
+    an empty cache, the plain one is written and the excluded one is not; both still run."""
+    script = textwrap.dedent(
+        """
+        import sys
+        import jax
+        import jax.numpy as jnp
+        import gearjax as gj
+
+        jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+
+        @jax.jit
+        def plain_program(x):
+            return jnp.sin(x) * 2.0
+
+        @jax.jit
+        def excluded_program(x):
+            gj.exclude_from_persistent_cache()
+            return jnp.sin(x) * 2.0
+
+        print(float(plain_program(1.0)), float(excluded_program(1.0)))
+        """
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith("JAX_")}
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path)], capture_output=True, text=True, env=env,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    plain, excluded = (float(v) for v in proc.stdout.split())
+    assert plain == excluded == pytest.approx(2.0 * math.sin(1.0), rel=1e-6)
+    names = [p.name for p in tmp_path.iterdir()]
+    assert any(n.startswith("jit_plain_program") for n in names), names
+    assert not any(n.startswith("jit_excluded_program") for n in names), names

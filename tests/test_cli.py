@@ -190,10 +190,10 @@ def test_reproduce_dca_json(capsys):
             assert ours == pytest.approx(paper, rel=3e-4)
 
 
-def test_optimize_runs_without_the_persistent_cache_and_run_with_it(tmp_path):
-    """In a fresh process (where JAX has not yet decided on its cache), `optimize` turns
-    JAX's persistent compilation cache off for its run (a cached impact-gradient executable
-    crashes the process that loads it, `gearjax.cache`), `run` turns it on; and each
+def test_commands_use_the_persistent_cache_unless_told_not_to(tmp_path):
+    """In a fresh process (where JAX has not yet decided on its cache), `optimize` and `run`
+    turn JAX's persistent compilation cache on for their run (the optimiser's gradient
+    program keeps itself out of it, `gearjax.cache`), `--no-cache` turns it off; and each
     command leaves the setting as it found it."""
     import os
     import subprocess
@@ -202,9 +202,9 @@ def test_optimize_runs_without_the_persistent_cache_and_run_with_it(tmp_path):
     script = (
         "import argparse, jax\n"
         "from gearjax.cli import _caches\n"
-        "for command in ('optimize', 'run'):\n"
+        "for command, no_cache in (('optimize', False), ('run', False), ('run', True)):\n"
         "    before = jax.config.jax_enable_compilation_cache\n"
-        "    with _caches(argparse.Namespace(command=command, no_cache=False)):\n"
+        "    with _caches(argparse.Namespace(command=command, no_cache=no_cache)):\n"
         "        print(command, jax.config.jax_enable_compilation_cache, jax.config.jax_compilation_cache_dir)\n"
         "    assert jax.config.jax_enable_compilation_cache == before\n"
     )
@@ -213,5 +213,6 @@ def test_optimize_runs_without_the_persistent_cache_and_run_with_it(tmp_path):
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr[-2000:]
     lines = proc.stdout.splitlines()
-    assert lines[0].split()[:2] == ["optimize", "False"]
+    assert lines[0].split() == ["optimize", "True", str(tmp_path / "cache")]
     assert lines[1].split() == ["run", "True", str(tmp_path / "cache")]
+    assert lines[2].split()[:2] == ["run", "False"]

@@ -193,11 +193,12 @@ def test_gradient_descent_lowers_the_objective_from_a_poor_start(objective, spac
     assert result.gradient_evaluations == result.evaluations == STARTS * result.steps
 
 
-def test_sensitivities_agree_with_the_energy_method_the_batch_gradient_and_differences(objective, space, designs,
-                                                                                        regimes):
-    """`sensitivities` (one reverse-mode program of J with respect to the design, the loads,
-    the speed and the errors) on both sides of the surface/edge switch: the paper's optimum
-    strikes with the gear's tip edge, the long deep relief flank on flank (`regimes`)."""
+def test_sensitivities_agree_with_the_energy_method_the_descent_gradient_and_differences(objective, space, designs,
+                                                                                          regimes):
+    """`sensitivities` (∂J with respect to the design, the loads, the speed and the errors)
+    on both sides of the surface/edge switch: the paper's optimum strikes with the gear's
+    tip edge, the long deep relief flank on flank (`regimes`). The two designs go in one
+    call: the gradient descent's program of 2 starts, compiled once for both tests."""
     assert regimes == ["edge", "surface"]
     _, grads = _batch_value_and_grad(objective, space, np.asarray(space.to_unit(designs[:2])))
     # central differences in the torque, the two designs side by side in one batch
@@ -209,8 +210,9 @@ def test_sensitivities_agree_with_the_energy_method_the_batch_gradient_and_diffe
 
     t = float(objective.torques[0])
     central = (at_torque(t + h) - at_torque(t - h))[:: POPULATION // 2] / (2 * h) * 1e3  # per N·m
-    for k in range(2):
-        s = go.sensitivities(objective, designs[k], space)
+    both = go.sensitivities(objective, designs[:2], space)
+    assert isinstance(both, list) and len(both) == 2
+    for k, s in enumerate(both):
         impact = _simulate(objective, designs[k]).impact
         assert s["objective"] == pytest.approx(float(impact.force), rel=1e-9)
         n = float(impact.stiffness.exponent)
@@ -218,10 +220,16 @@ def test_sensitivities_agree_with_the_energy_method_the_batch_gradient_and_diffe
         assert s["speed"]["log_derivative"] == pytest.approx(2 * n / (n + 1), rel=1e-6)
         per_width = np.array([e["per_bound_width"] for e in s["parameters"].values()])
         np.testing.assert_allclose(per_width, np.asarray(grads[k]), rtol=1e-6)
+        # the scene file's units: per µm of an amount (y1, y2, y5), per mm of a length
+        gradient = np.array([e["gradient"] for e in s["parameters"].values()])
+        np.testing.assert_allclose(gradient * [1e3, 1e3, 1, 1, 1e3, 1], np.asarray(grads[k] / space.width), rtol=1e-6)
         assert s["loads"][0]["gradient_per_Nm"] == pytest.approx(central[k], rel=1e-3)
         assert set(s["errors"]) == {"base_pitch_deviation_um", "pitch_deviation_um", "misalignment_um"}
         assert all(np.isfinite(v) for v in s["errors"].values())
-    assert "speed" in go.sensitivity_table(s)
+    assert "speed" in go.sensitivity_table(both[0])
+    for bad in (designs[0][:5], designs[:0], np.full(6, np.nan)):
+        with pytest.raises(ValueError, match="design"):
+            go.sensitivities(objective, bad, space)
 
 
 @pytest.mark.parametrize(

@@ -14,71 +14,71 @@ a check of the derivative chain that `tests/test_optimize.py` uses.
 
 from __future__ import annotations
 
-import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import ArrayLike
 from .objective import Objective
+from .run import _batch_gradients
 from .space import PARAMETERS, SCENE_KEYS, DesignSpace
 
 _ERRORS = (("base_pitch_deviation", "base_pitch_deviation_um"), ("pitch_deviation", "pitch_deviation_um"),
            ("misalignment", "misalignment_um"))
 
 
-@eqx.filter_jit
-def _gradients(objective: Objective, design, torques, speed, errors):
-    def J(design, torques, speed, errors):
-        o = eqx.tree_at(lambda o: (o.torques, o.scene.operating.speed, o.errors), objective, (torques, speed, errors))
-        return o(design)
-
-    return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speed, errors)
-
-
-def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | None = None) -> dict:
-    """Gradient of the objective at `design` (mm, shape (6,)).
+def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | None = None) -> dict | list[dict]:
+    """Gradient of the objective at `design` (mm, shape (6,)), or at each of several designs
+    (shape (K, 6)) in one compiled call: the program that gradient descent runs with K
+    starts (`gearjax.optimize.run._batch_gradients`), so sensitivities at as many designs as
+    the descent has starts cost no compilation after a descent, and none before one.
 
     Args:
         objective: the `Objective`.
-        design: $(y_1, \\dots, y_6)$ (mm).
+        design: $(y_1, \\dots, y_6)$ (mm), shape (6,) or (K, 6).
         space: the design space, for the normalised parameter sensitivities (optional).
 
     Returns:
-        A dict with `objective` ($J$), `parameters`: for each modification parameter its
-        value and $\\partial J/\\partial y$ in the scene file's units (per µm of an amount,
-        per mm of a length) and, with a space, `per_bound_width` ($w\\,\\partial J/\\partial y$);
+        For one design a dict (a list of them for K designs) with `objective` ($J$),
+        `parameters`: for each modification parameter its value and
+        $\\partial J/\\partial y$ in the scene file's units (per µm of an amount, per mm of a
+        length) and, with a space, `per_bound_width` ($w\\,\\partial J/\\partial y$);
         `loads`: $\\partial J/\\partial T$ per N·m for each load; `speed`:
         $\\partial J/\\partial n$ per rpm and the log-derivative
         $(\\omega/J)\\,\\partial J/\\partial\\omega$; `errors`: $\\partial J/\\partial f$ per µm
         for a common shift of each error over all samples.
     """
-    dtype = objective.torques.dtype
-    design = jnp.asarray(design, dtype)
-    speed = jnp.asarray(objective.scene.operating.speed, dtype)
-    value, (g_design, g_torque, g_speed, g_errors) = _gradients(objective, design, objective.torques, speed, objective.errors)
-    value = float(value)
-    parameters = {}
-    for i, ((key, factor), name) in enumerate(zip(SCENE_KEYS, PARAMETERS)):
-        entry = {"key": key, "value": float(design[i]) * factor, "gradient": float(g_design[i]) / factor}
-        if space is not None:
-            entry["per_bound_width"] = float(g_design[i] * space.width[i])
-        parameters[name] = entry
+    designs = np.asarray(design, dtype=float)
+    if not (designs.shape == (6,) or (designs.ndim == 2 and designs.shape[1] == 6 and len(designs) > 0)):
+        raise ValueError(f"design must have shape (6,) or (K, 6) (y1..y6, mm); got shape {designs.shape}")
+    if not np.all(np.isfinite(designs)):
+        raise ValueError("design must be finite (y1..y6, mm)")
+    values, (g_design, g_torque, g_speed, g_errors) = _batch_gradients(objective, designs.reshape(-1, 6))
+    speed = float(objective.scene.operating.speed)
     rpm = 2.0 * np.pi / 60.0  # rad/s per rpm
-    return {
-        "objective": value,
-        "parameters": parameters,
-        "loads": [
-            {"torque_Nm": float(t) / 1000.0, "gradient_per_Nm": float(g) * 1000.0}
-            for t, g in zip(np.asarray(objective.torques), np.asarray(g_torque))
-        ],
-        "speed": {
-            "speed_rpm": float(speed) / rpm,
-            "gradient_per_rpm": float(g_speed) * rpm,
-            "log_derivative": float(g_speed) * float(speed) / value,
-        },
-        "errors": {key: float(jnp.sum(getattr(g_errors, name))) * 1e-3 for name, key in _ERRORS},
-    }
+    results = []
+    for k, y in enumerate(designs.reshape(-1, 6)):
+        value = float(values[k])
+        parameters = {}
+        for i, ((key, factor), name) in enumerate(zip(SCENE_KEYS, PARAMETERS, strict=True)):
+            entry = {"key": key, "value": float(y[i]) * factor, "gradient": float(g_design[k, i]) / factor}
+            if space is not None:
+                entry["per_bound_width"] = float(g_design[k, i] * space.width[i])
+            parameters[name] = entry
+        results.append({
+            "objective": value,
+            "parameters": parameters,
+            "loads": [
+                {"torque_Nm": float(t) / 1000.0, "gradient_per_Nm": float(g) * 1000.0}
+                for t, g in zip(np.asarray(objective.torques), np.asarray(g_torque[k]), strict=True)
+            ],
+            "speed": {
+                "speed_rpm": speed / rpm,
+                "gradient_per_rpm": float(g_speed[k]) * rpm,
+                "log_derivative": float(g_speed[k]) * speed / value,
+            },
+            "errors": {key: float(jnp.sum(getattr(g_errors, name)[k])) * 1e-3 for name, key in _ERRORS},
+        })
+    return results[0] if designs.ndim == 1 else results
 
 
 def sensitivity_table(result: dict) -> str:
