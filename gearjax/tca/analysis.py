@@ -145,23 +145,29 @@ def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
     contacts at `fast`). The failures are gathered into a fixed number of problems
     (`fallback_capacity`; failures beyond it stay failed), solved from their starts and
     scattered back, so the fallback costs a few dozen solves whatever the grid's size, and
-    every candidate Newton solved keeps its value."""
-    values, converged, failed = candidates
-    shape = failed.shape
-    (index,) = jnp.nonzero(failed.reshape(-1), size=fallback_capacity(failed.size), fill_value=-1)
-    a, b, c, kind = jnp.unravel_index(jnp.maximum(index, 0), shape)
-    taken = index >= 0
+    every candidate Newton solved keeps its value; it is skipped where none failed."""
+    shape = candidates[2].shape
 
-    def again(a, b, c, kind, taken):
-        return solve_again(make_problem(pair, depth, ks[b], z[c], phi[a]), kind, solver, max_steps, taken)
+    def retry(candidates):
+        values, converged, failed = candidates
+        (index,) = jnp.nonzero(failed.reshape(-1), size=fallback_capacity(failed.size), fill_value=-1)
+        a, b, c, kind = jnp.unravel_index(jnp.maximum(index, 0), shape)
+        taken = index >= 0
 
-    # Padding entries solve a trivial problem, so that a grid without failures costs the
-    # fallback one step, not its whole step budget.
-    value, ok, still = jax.vmap(again)(a, b, c, kind, taken)
-    # Padding entries (index -1) scatter out of bounds and are dropped.
-    target = jnp.where(taken, index, failed.size)
-    scatter = lambda full, part: full.reshape(-1, *full.shape[len(shape):]).at[target].set(part, mode="drop").reshape(full.shape)  # noqa: E731
-    return scatter(values, value), scatter(converged, ok & taken), scatter(failed, still & taken)
+        def again(a, b, c, kind, taken):
+            return solve_again(make_problem(pair, depth, ks[b], z[c], phi[a]), kind, solver, max_steps, taken)
+
+        # Padding entries solve a trivial problem, so that they cost the fallback one step,
+        # not its whole step budget.
+        value, ok, still = jax.vmap(again)(a, b, c, kind, taken)
+        # Padding entries (index -1) scatter out of bounds and are dropped.
+        target = jnp.where(taken, index, failed.size)
+        scatter = lambda full, part: full.reshape(-1, *full.shape[len(shape):]).at[target].set(part, mode="drop").reshape(full.shape)  # noqa: E731
+        return scatter(values, value), scatter(converged, ok & taken), scatter(failed, still & taken)
+
+    # A grid without failures (nearly every one) skips the fallback; under `vmap` the
+    # condition is batched and both branches run, as without it.
+    return jax.lax.cond(jnp.any(candidates[2]), retry, lambda candidates: candidates, candidates)
 
 
 def _plane_of_action_slice(pair, depth, k, z, phi1) -> SliceContact:
