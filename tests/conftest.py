@@ -37,6 +37,41 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
+#: Approximate cost (s) of each work unit of the test run (a test file, or one notebook), from
+#: `--durations=0` of one whole run on 2 cores (2026-11-26); only the schedule uses them.
+UNIT_COSTS = {
+    "test_optimize.py": 640, "test_sweep.py": 446, "test_ltca.py": 400, "test_impact.py": 352,
+    "06_optimisation.ipynb": 306, "test_hard_cases.py": 298, "test_results.py": 282,
+    "test_hard_cases_curvilinear.py": 251, "test_hard_cases_double_arc.py": 185, "test_tca.py": 174,
+    "test_hard_cases_ratios.py": 144, "02_double_circular_arc.ipynb": 128, "test_curvilinear.py": 125,
+    "test_cli.py": 123, "07_sweeps.ipynb": 123, "test_scene.py": 114, "05_mesh_in_impact.ipynb": 99,
+    "test_transforms.py": 95, "04_ltca.ipynb": 69, "test_cache.py": 59, "01_involute_tca.ipynb": 54,
+    "03_curvilinear.ipynb": 50, "test_double_arc.py": 42, "test_resources.py": 25,
+}
+
+
+def _work_unit(item) -> str:
+    """A test file, whose tests share their compiled programs through module-scoped
+    fixtures; the notebooks, which share nothing, one each."""
+    if item.path.name == "test_notebooks.py":
+        return item.callspec.params["path"].name
+    return item.path.name
+
+
+def pytest_collection_modifyitems(config, items):
+    """Schedule for `pytest -n 2 --dist loadgroup --no-loadscope-reorder` (`make test`):
+    each work unit is an xdist group that one worker runs whole, and the units go out
+    longest first (`UNIT_COSTS`), so that the two workers end together; the notebooks,
+    one file but 14 % of the run, no longer go to one worker at the end. The order is
+    deterministic (every worker must collect the same list); a cost that is off only slows
+    the run down."""
+    units = list(dict.fromkeys(_work_unit(item) for item in items))
+    rank = {unit: k for k, unit in enumerate(sorted(units, key=lambda u: -UNIT_COSTS.get(u, 0)))}
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(_work_unit(item)))
+    items.sort(key=lambda item: rank[_work_unit(item)])
+
+
 @pytest.fixture(scope="session")
 def seed_pair():
     """Seed 001's 29/71 helical pair (x1 = x2 = 0, a = 281.85 mm)."""
