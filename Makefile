@@ -18,7 +18,7 @@ demo: $(BIN)/python
 # Installs the test dependencies and runs the whole suite (notebooks included).
 test: $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[dev,plot]"
-	$(BIN)/python -m pytest -q -n 2 --dist loadgroup --no-loadscope-reorder --durations=30
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
 # Benchmarks are not tests: they time things and write benchmarks/results/*.json.
 bench: $(BIN)/python

@@ -37,39 +37,29 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
-#: Approximate cost (s) of each work unit of the test run (a test file, or one notebook), from
-#: `--durations=0` of one whole run on 2 cores (2026-11-26); only the schedule uses them.
-UNIT_COSTS = {
-    "test_optimize.py": 640, "test_sweep.py": 446, "test_ltca.py": 400, "test_impact.py": 352,
-    "06_optimisation.ipynb": 306, "test_hard_cases.py": 298, "test_results.py": 282,
+#: Approximate cost (s) of each test file in one whole run on 2 cores (`--durations=0`,
+#: 2026-11-26); only the schedule uses them.
+FILE_COSTS = {
+    "test_notebooks.py": 831, "test_optimize.py": 640, "test_sweep.py": 446, "test_ltca.py": 400,
+    "test_impact.py": 352, "test_hard_cases.py": 298, "test_results.py": 282,
     "test_hard_cases_curvilinear.py": 251, "test_hard_cases_double_arc.py": 185, "test_tca.py": 174,
-    "test_hard_cases_ratios.py": 144, "02_double_circular_arc.ipynb": 128, "test_curvilinear.py": 125,
-    "test_cli.py": 123, "07_sweeps.ipynb": 123, "test_scene.py": 114, "05_mesh_in_impact.ipynb": 99,
-    "test_transforms.py": 95, "04_ltca.ipynb": 69, "test_cache.py": 59, "01_involute_tca.ipynb": 54,
-    "03_curvilinear.ipynb": 50, "test_double_arc.py": 42, "test_resources.py": 25,
+    "test_hard_cases_ratios.py": 144, "test_curvilinear.py": 125, "test_cli.py": 123, "test_scene.py": 114,
+    "test_transforms.py": 95, "test_cache.py": 59, "test_double_arc.py": 42, "test_resources.py": 25,
 }
 
 
-def _work_unit(item) -> str:
-    """A test file, whose tests share their compiled programs through module-scoped
-    fixtures; the notebooks, which share nothing, one each."""
-    if item.path.name == "test_notebooks.py":
-        return item.callspec.params["path"].name
-    return item.path.name
-
-
 def pytest_collection_modifyitems(config, items):
-    """Schedule for `pytest -n 2 --dist loadgroup --no-loadscope-reorder` (`make test`):
-    each work unit is an xdist group that one worker runs whole, and the units go out
-    longest first (`UNIT_COSTS`), so that the two workers end together; the notebooks,
-    one file but 14 % of the run, no longer go to one worker at the end. The order is
-    deterministic (every worker must collect the same list); a cost that is off only slows
-    the run down."""
-    units = list(dict.fromkeys(_work_unit(item) for item in items))
-    rank = {unit: k for k, unit in enumerate(sorted(units, key=lambda u: -UNIT_COSTS.get(u, 0)))}
-    for item in items:
-        item.add_marker(pytest.mark.xdist_group(_work_unit(item)))
-    items.sort(key=lambda item: rank[_work_unit(item)])
+    """Schedule for `pytest -n 2 --dist loadfile --no-loadscope-reorder` (`make test`): each
+    test file goes whole to one worker (its module fixtures share the compiled programs)
+    and the files go out longest first (`FILE_COSTS`), so that the two workers end
+    together. xdist's own order (most tests first) sent the notebooks (831 s, one file)
+    last, to one worker. Deterministic (every worker must collect the same list); a cost
+    that is off only slows the run down. (`--dist loadgroup` would split the notebooks, but
+    with pytest 9.2 it is a no-op: xdist 3.8 renames `item._nodeid`, which pytest no longer
+    reads, so every test became its own unit and the module fixtures ran on both workers.)"""
+    files = list(dict.fromkeys(item.path.name for item in items))
+    rank = {name: k for k, name in enumerate(sorted(files, key=lambda f: -FILE_COSTS.get(f, 0)))}
+    items.sort(key=lambda item: rank[item.path.name])
 
 
 @pytest.fixture(scope="session")
