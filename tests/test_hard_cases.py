@@ -210,9 +210,10 @@ def random_failures(groups):
 # Measured on these 400 designs at the `fast` preset (2026-11-25), open in issue #12:
 RANDOM_KNOWN = {
     "impact": "first-contact search unconverged in 20 of 400 designs (29/71): the gap H jumps "
-              "where a face-end slice's flank contact becomes valid already ahead of the edge "
-              "contact (a tip/face-end corner contact that the TCA does not model; seen on "
-              "design 18: H from -7.0e-5 to +1.07e-4 rad between neighbouring angles)",
+              "where the TCA's flank solve misses a flank contact inside a deep, short relief "
+              "(Newton runs to a root beyond the tip) at one angle and finds it at the next "
+              "(design 18: H from -7.0e-5 to +1.07e-4 rad between neighbouring angles; see the "
+              "README's hard cases)",
 }
 
 
