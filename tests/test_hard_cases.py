@@ -207,15 +207,12 @@ def random_failures(groups):
     return count_failures({"seed_29_71": (groups[0], len(CASES), len(CASES) + RANDOM)})
 
 
-# Measured on these 400 designs at the `fast` preset (2026-11-25), open in issue #12:
-RANDOM_KNOWN = {
-    "impact": "first-contact search unconverged in 20 of 400 designs (29/71): the gap H jumps "
-              "where the TCA's flank solve misses a flank contact inside a deep, short relief "
-              "(Newton runs to a root beyond the tip) at one angle and finds it at the next "
-              "(design 18: H from -7.0e-5 to +1.07e-4 rad between neighbouring angles; see the "
-              "README's hard cases). Fixed on branch wip/issue12-lapack-free (0 of 400 there), "
-              "not yet on main because its LAPACK-free solves are too slow",
-}
+# No failure is known on these 400 designs at the `fast` preset (2026-11-26). The 20 impact
+# searches that did not converge before (the gap H jumped where the TCA's flank solve missed
+# a flank contact inside a deep, short relief) converge since the TCA checks that an edge
+# contact is a maximum of the offset (`tca._slice.edge_is_first`) and the search checks its
+# bracket's ends.
+RANDOM_KNOWN = {}
 
 
 @pytest.mark.parametrize("kind", failure_kinds(RANDOM_KNOWN))

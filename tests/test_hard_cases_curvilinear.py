@@ -82,12 +82,9 @@ def random_failures(curvilinear):
     return count_failures({"curvilinear": (curvilinear[0], len(CASES), len(CASES) + RANDOM)})
 
 
-# Measured on these 260 designs at the `fast` preset (2026-11-25), open in issue #12 (the
-# same two failures as the involute designs', see test_hard_cases.py):
-RANDOM_KNOWN = {
-    "impact": "first-contact search unconverged (the gap H jumps): 2 of 260 curvilinear designs; the "
-              "missed flank contact of test_hard_cases.py's 20 (0 of 260 on branch wip/issue12-lapack-free)",
-}
+# No failure is known on these 260 designs at the `fast` preset (2026-11-26; the 2 impact
+# searches that did not converge before converge since the fix of test_hard_cases.py's 20).
+RANDOM_KNOWN = {}
 
 
 @pytest.mark.parametrize("kind", failure_kinds(RANDOM_KNOWN))

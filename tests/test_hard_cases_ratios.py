@@ -64,12 +64,13 @@ def random_failures(groups):
     return failed
 
 
-# Measured on these designs at the `fast` preset (2026-11-25), open in issue #12 (the same
-# failure as in test_hard_cases.py):
+# Measured on these designs at the `fast` preset (2026-11-26), open in issue #12
+# (`tools/diagnostics/issue12/ratio_tca.py` lists the candidates):
 RANDOM_KNOWN = {
     "tca": "a TCA candidate solve fails on the active flank of a loaded slice, Newton and its damped "
-           "fallback both (a contact may be missed): 2 of 150 designs on 17/170 (8 before the "
-           "fallback), 0 of 150 on 40/40 (1 before)",
+           "fallback both (a contact may be missed): 2 of 150 designs on 17/170 (68: the gear-tip "
+           "edge solve diverges at one slice; 143, m_n 1.0 mm: flank solves run past the gear's "
+           "tip at 6 slices), 0 of 150 on 40/40",
 }
 
 

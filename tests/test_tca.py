@@ -271,3 +271,60 @@ def test_safeguarded_newton_converges_where_newton_diverges():
     sol = optx.root_find(f, SafeguardedNewton(rtol=1e-12, atol=1e-12), y0, max_steps=40, throw=False)
     assert sol.result == optx.RESULTS.successful
     assert abs(float(sol.value[0])) < 1e-12
+
+
+def test_flank_contact_inside_a_steep_tip_relief_is_not_missed():
+    """A spur pair with a short, deep pinion tip relief (27 um over 0.27 mm, random design
+    0 of `test_hard_cases.py`) just after the conjugate contact has left the pinion's tip:
+    the first contact is on the flanks at the start of the relief, ahead of the tip edge
+    (issue #12: the flank solve ran past the tip, so the TCA took the edge, ~3e-4 rad lower,
+    and the impact search met a jump). The TCA's slice values equal the largest offset
+    along the curve of coincident points, found independently by brute force: for 2 001
+    pinion profile points $u_1$ on the active flank, the gear point $u_2$ and offset that
+    bring the flanks together (2 equations, Newton), the largest offset among those with
+    $u_2$ on the gear's active flank, refined on 2 001 points between the best one's
+    neighbours. (Before the fix, the TCA's values at these angles were those of the tip
+    edge instead.)"""
+    import optimistix as optx
+
+    from gearjax.tca._slice import make_problem
+
+    pair = InvoluteGearPair((29, 71), 2.2647, 19.2261, 0.0, 19.1957, (-0.2895, 0.1502),
+                            addendum_coefficient=1.0743, dedendum_coefficient=1.3243).resolve()
+    depth = FlankDepth(FlankModification(0.02716, 0.02701, 0.49686, 0.26748))
+    (lo1, hi1), (lo2, hi2) = (tuple(float(v) for v in pair.profile_limits(g)) for g in (0, 1))
+    rb1, tan_a = float(pair.base_radius[0]), math.tan(float(pair.working_pressure_angle))
+    past_tip = np.array([0.05, 0.2, 0.4, 0.6])  # conjugate contact beyond the pinion tip (mm)
+    angles = jnp.asarray((hi1 + past_tip) / rb1 - tan_a)
+    # The spur pair's slices are alike, so 3 do: with ACC's 9, the 36 missed flank solves
+    # would exceed the fallback's capacity for this small grid (32, `fallback_capacity`)
+    # and the last 4 would stay unconverged, as reported.
+    result = tca(pair, depth, ACC.replace(face_slices=1), (0,), angles)
+    assert int(np.sum(result.unconverged)) == 0
+
+    u1 = jnp.linspace(lo1, hi1, 2001)
+
+    def largest_offset(angle):
+        problem = make_problem(pair, depth, 0, 0.0, angle)
+
+        def mate(u):
+            def coincide(y, _):
+                return problem.pinion_point(u) - problem.gear_point(y[0], y[1])
+
+            start = jnp.stack([pair.line_of_action_length - u, jnp.zeros_like(u)])
+            sol = optx.root_find(coincide, optx.Newton(rtol=1e-12, atol=1e-14), start, max_steps=50, throw=False)
+            ok = (sol.result == optx.RESULTS.successful) & (sol.value[0] >= lo2) & (sol.value[0] <= hi2)
+            return jnp.where(ok, sol.value[1], -jnp.inf)
+
+        coarse = jax.vmap(mate)(u1)
+        best = jnp.argmax(coarse)  # then 2 001 points between its neighbours: the offset's
+        # curvature in a relief (~0.03 rad/mm^2) would leave ~3e-7 rad on the coarse grid
+        fine = jnp.linspace(u1[jnp.maximum(best - 1, 0)], u1[jnp.minimum(best + 1, u1.size - 1)], 2001)
+        return jnp.max(jax.vmap(mate)(fine))
+
+    expected = np.asarray(jax.jit(jax.vmap(largest_offset))(angles))
+    te = np.asarray(result.slice_te[:, 0, :])  # (angle, slice): every slice alike (spur)
+    assert np.all(np.isfinite(expected))
+    np.testing.assert_allclose(te, np.broadcast_to(expected[:, None], te.shape), rtol=0, atol=1e-8)
+    # and it is a flank contact, not the tip edge's (an interior maximum)
+    assert np.all(np.asarray(result.kind == ContactKind.flank)[:, 0, :])

@@ -228,7 +228,9 @@ class _SearchState(eqx.Module):
 
     lower: Scalar
     upper: Scalar
+    checked: Bool[Array, "2"]  # the sign of H at (lower, upper) was evaluated, not taken from the grid
     point: Scalar  # where the next evaluation goes
+    probe: Int[Array, ""]  # the point is the lower end to check (-1), the upper one (+1), or neither (0)
     last_step: Scalar  # length of the previous step (the safeguard's reference)
     search: _Search
 
@@ -248,7 +250,17 @@ def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) ->
     Starts at the regula-falsi point of the grid values. Each step evaluates $H$ and $H'$ at
     the current point, moves the bracket end of the same sign there, and takes the Newton
     step when it stays inside the bracket and is at most half the previous step, else
-    bisects. Converged once $|H| \\le$ atol and either the Newton step or the bracket is
+    bisects.
+
+    The grid's signs at the bracket ends are those of the scene's LTCA, with the incoming
+    pair loaded; the search's $H$ leaves it out of the LTCA, and the window of tooth pairs
+    shifts by one between the grid's last position and the angle one step before its first.
+    So a bracket end is checked before the search relies on it: where the Newton step
+    leaves the bracket past an end whose sign was never evaluated, or the bracket shrinks
+    onto it, the next point is that end; if its sign is the wrong one the bracket moves
+    outwards by its initial width and the new end is checked (issue #12: 5 of 400 random
+    29/71 designs had $H > 0$ at the grid's lower end, so the search shrank onto it and
+    never converged). Converged once $|H| \\le$ atol and either the Newton step or the bracket is
     below atol + rtol$|\\varphi_1|$ (the tolerances of `Accuracy.newton_atol/rtol`, floored
     near machine precision); at most `Accuracy.impact_max_steps` evaluations. No gradient
     flows through the iteration (`first_contact` supplies it).
@@ -268,7 +280,8 @@ def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) ->
     )
     zero = jnp.zeros((), jnp.int32)
     initial = _SearchState(
-        lower, upper, start, width, _Search(start, contact, j, solved, zero, jnp.zeros((), bool))
+        lower, upper, jnp.zeros(2, bool), start, zero, width,
+        _Search(start, contact, j, solved, zero, jnp.zeros((), bool)),
     )
     max_steps = ctx.model.accuracy.impact_max_steps
 
@@ -281,8 +294,14 @@ def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) ->
         contact, (j, solved) = evaluate(x)
         h, dh = contact.gap, contact.gap_slope
         below = h < 0
-        lower = jnp.where(below, x, state.lower)
-        upper = jnp.where(below, state.upper, x)
+        # A checked end of the wrong sign: the crossing lies beyond it, so the bracket
+        # moves outwards by its initial width.
+        out_down = (state.probe == -1) & ~below
+        out_up = (state.probe == 1) & below
+        lower = jnp.where(below, x, jnp.where(out_down, x - width, state.lower))
+        upper = jnp.where(below, jnp.where(out_up, x + width, state.upper), x)
+        checked = jnp.stack([jnp.where(below, True, state.checked[0] & ~out_down),
+                             jnp.where(below, state.checked[1] & ~out_up, True)])
         tol = atol + rtol * jnp.abs(x)
         increasing = dh > tiny
         newton = -safe_divide(h, jnp.where(increasing, dh, 0.0))
@@ -292,8 +311,15 @@ def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) ->
             increasing & (candidate > lower) & (candidate < upper) & (jnp.abs(newton) <= 0.5 * state.last_step)
         )
         point = jnp.where(take_newton, candidate, lower + 0.5 * (upper - lower))
+        # Check an end before relying on it: where the step leaves the bracket past it, or
+        # the bracket has shrunk onto it.
+        shrunk = upper - lower <= tol
+        check_lower = ~checked[0] & (out_down | (increasing & (candidate <= lower)) | (shrunk & ~below))
+        check_upper = ~checked[1] & ~check_lower & (out_up | (increasing & (candidate >= upper)) | (shrunk & below))
+        point = jnp.where(check_lower, lower, jnp.where(check_upper, upper, point))
+        probe = jnp.where(check_lower, -1, jnp.where(check_upper, 1, 0)).astype(jnp.int32)
         search = _Search(x, contact, j, solved, state.search.steps + 1, converged)
-        return _SearchState(lower, upper, point, jnp.abs(point - x), search)
+        return _SearchState(lower, upper, checked, point, probe, jnp.abs(point - x), search)
 
     return jax.lax.while_loop(cond, body, initial).search
 

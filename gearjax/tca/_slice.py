@@ -19,6 +19,15 @@ flanks; the slice value is the largest valid $\Delta$ (the first feature to touc
 and flank candidates coincide when the flank contact reaches the tip, so the slice value is
 continuous, and (envelope theorem) so is its derivative with respect to the pinion angle.
 
+An edge contact is the first contact only if it is a local maximum of $\Delta$ along the
+curve of coincident points, i.e. if $\Delta$ rises towards the tip there
+(`edge_is_first`). Where it falls instead, a flank contact inside the active flanks
+touches first; if the flank solve missed it (Newton went to a root beyond the tip, which
+the selection rejects), the flank candidate counts as failed and the analysis solves it
+again from the edge contact with the damped Newton (`solve_again`; issue #12: on random
+designs with deep reliefs the flank root beyond the tip hid the interior one at some
+pinion angles, so the slice value jumped by up to 3e-4 rad between neighbouring angles).
+
 Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
 `args`; the analysis solves the candidates whose Newton solve failed again with a damped
@@ -140,11 +149,14 @@ def _within(u, limits, tol):
 
 
 def _starts(problem: SliceProblem):
-    """Starting points of the three candidates: the conjugate contact for the flank; for
-    an edge, the mate's flank point at the radius of the tip corner."""
+    """Starting points of the three candidates: the conjugate contact for the flank, held
+    to the active flanks (beyond a tip a relief's parabola, extrapolated, tilts the flank
+    so far that Newton runs off: issue #12); for an edge, the mate's flank point at the
+    radius of the tip corner."""
     pair = problem.pair
     lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
     g1, g2 = pair.contact_guess(problem.pinion_rotation)
+    g1, g2 = jnp.clip(g1, *lim1), jnp.clip(g2, *lim2)
     zero = jnp.zeros_like(g1)
     corner2 = problem.gear_point(lim2[1], zero)
     edge2_u1 = pair.parameter_at_radius(0, safe_norm(corner2 - pair.center(0)))
@@ -205,28 +217,86 @@ def _solve(problem, solver, max_steps, y0, selector, relevant):
     return sol.value, success & relevant, relevant & ~success & ~off_flank
 
 
+def _on_active_flanks(pair: AbstractFlankPair, values):
+    """Candidates (..., 3) whose contact $(u_1, u_2)$ lies on the active flanks."""
+    lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
+    tol = _parameter_tolerance(lim1[1])
+    return _within(values[..., 0], lim1, tol) & _within(values[..., 1], lim2, tol)
+
+
+def edge_is_first(problem: SliceProblem, values):
+    r"""Whether each edge candidate (rows of `values`, (3, 3)) is a local maximum of the
+    offset along the curve of coincident points (3,; True for the flank row).
+
+    On that curve $X_1(u_1) = X_2(u_2, \Delta)$, so $t_1\,du_1 = t_2\,du_2 + g\,d\Delta$
+    with $t_i$ the profile tangents and $g = \partial X_2/\partial\Delta$; hence
+    $d\Delta/du_2 = -(t_1\times t_2)/(t_1\times g)$ at the gear's tip edge and
+    $d\Delta/du_1 = (t_2\times t_1)/(t_2\times g)$ at the pinion's. The edge (the end
+    $u = u_\text{tip}$ of its flank's active range) touches first only if the offset rises
+    towards it: the derivative, as the sine of the angle between the tangents, is not below
+    $-10^3\varepsilon$."""
+
+    def first(row, y):
+        u1, u2, offset = y[0], y[1], y[2]
+        _, t1 = problem.pinion_tangent(u1)
+        _, t2 = problem.gear_tangent(u2, offset)
+        _, g = jax.jvp(lambda d: problem.gear_point(u2, d), (offset,), (jnp.ones_like(offset),))
+        # the sign of d offset / d u along the curve, scaled to the sine between the tangents
+        gear_tip = -cross2(t1, t2) * jnp.sign(cross2(t1, g))
+        pinion_tip = cross2(t2, t1) * jnp.sign(cross2(t2, g))
+        rate = jnp.where(row == 1, gear_tip, pinion_tip) / (safe_norm(t1) * safe_norm(t2))
+        eps = float(jnp.finfo(jnp.result_type(offset)).eps)
+        return (row == FLANK) | (rate >= -1e3 * eps)
+
+    return jax.vmap(first)(jnp.arange(3), values)
+
+
+def _missed_flank(problem: SliceProblem, values, converged):
+    """Edge candidates (3,) that converged on the active flanks although a flank contact
+    inside them touches first (`edge_is_first` false): where the flank candidate is not
+    valid too, the flank solve missed its contact."""
+    ok = converged & _on_active_flanks(problem.pair, values)
+    return ok & ~edge_is_first(problem, values) & ~ok[FLANK]
+
+
 def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
     """Solve the three candidate problems of one slice: values (3, 3), converged (3,)
     (False for candidates screened out by `relevance`) and failed (3,) (relevant but not
-    converged, last iterate on the active flanks)."""
+    converged, last iterate on the active flanks; and the flank candidate where an edge
+    contact proves that its solve missed an interior contact, `_missed_flank`: the TCA
+    solves those again with `solve_again`)."""
     selectors = jnp.eye(3, dtype=problem.z.dtype)
-    return jax.vmap(ft.partial(_solve, problem, solver, max_steps))(_starts(problem), selectors, relevance(problem))
+    values, converged, failed = jax.vmap(ft.partial(_solve, problem, solver, max_steps))(
+        _starts(problem), selectors, relevance(problem))
+    missed = jnp.any(_missed_flank(problem, values, converged))
+    return values, converged, failed.at[FLANK].set(failed[FLANK] | missed)
 
 
-def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int, relevant=True):
-    """Solve candidate `candidate` (index into `CANDIDATES`) of one slice again from its
-    start, with another solver (the TCA's fallback for failed Newton solves): its value,
-    converged and failed as in `solve_candidates`. `relevant=False` (a padding entry of a
-    fixed-size batch) solves the trivial problem $y = y_0$ in one step."""
-    return _solve(problem, solver, max_steps, _starts(problem)[candidate], jnp.eye(3, dtype=problem.z.dtype)[candidate],
-                  jnp.asarray(relevant))
+def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int, relevant=True,
+                values=None, converged=None):
+    """Solve candidate `candidate` (index into `CANDIDATES`) of one slice again with another
+    solver (the TCA's fallback for failed Newton solves): its value, converged and failed
+    as in `solve_candidates`. `relevant=False` (a padding entry of a fixed-size batch)
+    solves the trivial problem $y = y_0$ in one step.
+
+    It starts where the first solve did. Given that solve's `values` (3, 3) and
+    `converged` (3,), a flank candidate that missed its contact (`_missed_flank`) starts
+    from the edge contact that proved it (plain Newton from there often runs past the tip
+    too) and still fails unless this solve ends on the active flanks."""
+    start = _starts(problem)[candidate]
+    missed = jnp.zeros(3, bool)
+    if values is not None:
+        missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
+        start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], start)
+    value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
+                               jnp.asarray(relevant))
+    again = jnp.any(missed) & ~(ok & _on_active_flanks(problem.pair, value))
+    return value, ok, failed | (again & relevant)
 
 
 def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceContact:
     """Keep the first contact among the valid candidates (largest offset)."""
-    lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
-    tol = _parameter_tolerance(lim1[1])
-    ok = converged & _within(values[:, 0], lim1, tol) & _within(values[:, 1], lim2, tol)
+    ok = converged & _on_active_flanks(pair, values)
     # On ties (flank contact exactly at a tip) argmax keeps the first: the flank.
     kind = jnp.argmax(jnp.where(ok, values[:, 2], -jnp.inf))
     any_ok = jnp.any(ok)
