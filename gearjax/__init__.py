@@ -4,12 +4,15 @@ Pipeline: Scene -> geometry -> tca (rigid) -> ltca (elastic) -> impact -> result
 stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-compiled,
 `vmap`-batched and differentiated. gearjax changes no JAX configuration; float64, the
 reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. On
-import it appends one XLA CPU flag to `XLA_FLAGS` (unless already set) that avoids a
-runtime deadlock of jaxlib's CPU backend, see `gearjax._runtime`.
+import it sets, unless already set, `PJRT_NPROC=1` (with jaxlib 0.10.0-0.11.0) and one XLA
+CPU flag in `XLA_FLAGS`, against a deadlock of jaxlib's CPU LAPACK kernels; see
+`gearjax._runtime`.
 """
 
+from ._runtime import configure_thread_pool as _configure_thread_pool
 from ._runtime import configure_xla_flags as _configure_xla_flags
 
+_configure_thread_pool()
 _configure_xla_flags()
 
 from . import units as units

@@ -1,25 +1,48 @@
-"""Process-level XLA setting that gearjax needs on CPU.
+"""Process-level settings that gearjax needs on CPU, applied on import.
 
-With the CPU runtime of jaxlib 0.10.x, the *concurrency-optimised scheduler* deadlocks
-intermittently when the compiled LTCA program (positions `vmap`-ed over nested Newton
-loops) is executed a second time: every runtime thread parks on a futex and the call never
-returns (reproduced 3/3 at 32 positions x 21 slices, seed-001 pair, 1000 N m). With
-`--xla_cpu_enable_concurrency_optimized_scheduler=false` the same program ran hundreds of
-times without a hang and no slower. The flag only changes how independent operations are
-ordered, never what is computed.
+**The deadlock.** jaxlib 0.10.0 to 0.11.0 split a batched LAPACK call (`getrf`, `trsm`,
+`gtsv`, ... behind `jnp.linalg.solve` and lineax's LU solves) into chunks on XLA's intra-op
+thread pool once the batch is worth more than 2e5 flops, and the pool worker that runs the
+call then blocks until its chunks are done (`ParallelBatchMap` in
+`jaxlib/cpu/lapack_kernels.cc`). When as many such calls run at once as the pool has workers
+(XLA's CPU runtime runs independent operations concurrently), no worker is left to run a
+chunk and the program never returns: every thread parked on a futex, CPU time frozen. Seen
+in gearjax as hangs of the vmapped LTCA program (32 positions x 21 slices, seed-001 pair)
+and of batched derivative programs in the test suite (`gdb -p PID -batch -ex "thread apply
+all bt"`: both `tf_XLAEigen` workers in `lapack_dgetrf_ffi`/`lapack_dtrsm_ffi` ->
+`jax::ParallelBatchMap` -> `absl::BlockingCounter::Wait`). jax's own source stopped doing
+this in open-source builds after 0.11.0 (commit 859992407d, "Don't try to parallelize LAPACK
+kernels in opensource builds", 2026-07-21).
 
-The flag is read once, when the CPU backend starts, so gearjax appends it to `XLA_FLAGS` on
-import unless the user already set that flag either way. If JAX's backends were already
-running when gearjax was imported, the flag cannot take effect and a warning says so.
-Per-compile `compiler_options` do not reach this setting (tried: it still deadlocks).
+**What gearjax sets**, each unless the user already chose a value:
+
+- `PJRT_NPROC=1` (only for the affected jaxlib versions): XLA's CPU client sizes its intra-op
+  pool from this variable (`DefaultThreadPoolSize` in XLA's PjRt utilities), and jaxlib's
+  kernels never split a batch over a pool of one thread. This removes the deadlock; it also
+  runs each program's operations on one thread, which costs gearjax's programs little (they
+  are many small operations, not large matrix products; see `benchmarks/stages.py` figures
+  in the README) and nothing where processes already share the cores (pytest-xdist, a GA
+  population farmed out per process).
+- `--xla_cpu_enable_concurrency_optimized_scheduler=false` in `XLA_FLAGS`: the first
+  workaround, from before the cause was known. It made the deadlock rarer (fewer
+  independent LAPACK calls scheduled side by side) but did not remove it. It only changes
+  how independent operations are ordered, never what is computed, and stays as a second
+  guard for users who raise `PJRT_NPROC` again.
+
+Both are read once, when JAX's CPU backend starts. If the backends were already running when
+gearjax was imported, the settings cannot take effect and a warning says so.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import warnings
 
 FLAG = "xla_cpu_enable_concurrency_optimized_scheduler"
+NPROC = "PJRT_NPROC"
+#: jaxlib versions [first, end) whose CPU LAPACK kernels split batches over XLA's pool.
+AFFECTED_JAXLIB = ((0, 10, 0), (0, 11, 1))
 
 
 def configure_xla_flags() -> bool:
@@ -31,16 +54,52 @@ def configure_xla_flags() -> bool:
     if FLAG in flags:
         return False
     os.environ["XLA_FLAGS"] = (flags + f" --{FLAG}=false").strip()
+    _warn_if_started(f"--{FLAG}=false")
+    return True
+
+
+def configure_thread_pool(jaxlib_version: str | None = None) -> bool:
+    """Set `PJRT_NPROC=1` (one intra-op thread) when jaxlib's batched LAPACK can deadlock.
+
+    Args:
+        jaxlib_version: the installed jaxlib's version string (default: read from jaxlib).
+
+    Returns True when gearjax set the variable; False when the user already set
+    `PJRT_NPROC` or `NPROC` (which XLA reads in that order), or when this jaxlib is not
+    affected.
+    """
+    if NPROC in os.environ or "NPROC" in os.environ:
+        return False
+    if jaxlib_version is None:
+        from jaxlib import version as _jaxlib_version
+
+        jaxlib_version = _jaxlib_version.__version__
+    if not affected(jaxlib_version):
+        return False
+    os.environ[NPROC] = "1"
+    _warn_if_started(f"{NPROC}=1")
+    return True
+
+
+def affected(jaxlib_version: str) -> bool:
+    """Whether a jaxlib version splits batched LAPACK calls over XLA's pool (see module doc)."""
+    numbers = re.match(r"(\d+)\.(\d+)\.(\d+)", jaxlib_version)
+    if numbers is None:
+        return True  # unknown scheme: keep the guard
+    version = tuple(int(n) for n in numbers.groups())
+    return AFFECTED_JAXLIB[0] <= version < AFFECTED_JAXLIB[1]
+
+
+def _warn_if_started(setting: str) -> None:
     if _backends_started():
         warnings.warn(
-            "gearjax was imported after JAX had started its backends, so "
-            f"--{FLAG}=false (needed against an XLA CPU deadlock in repeated LTCA calls) "
-            "cannot take effect. Import gearjax before running any JAX computation, or "
-            f"set XLA_FLAGS=--{FLAG}=false in the environment.",
+            f"gearjax was imported after JAX had started its backends, so {setting} (needed "
+            "against a deadlock of jaxlib's CPU LAPACK kernels, see gearjax._runtime) cannot "
+            "take effect. Import gearjax before running any JAX computation, or set it in "
+            "the environment.",
             RuntimeWarning,
-            stacklevel=3,
+            stacklevel=4,
         )
-    return True
 
 
 def _backends_started() -> bool:

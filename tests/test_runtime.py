@@ -1,9 +1,15 @@
-"""The XLA CPU flag that gearjax sets on import (see `gearjax._runtime`)."""
+"""The process settings that gearjax makes on import (see `gearjax._runtime`)."""
 
 import os
+import subprocess
+import sys
+import textwrap
 import warnings
 
-import gearjax  # noqa: F401  (import sets the flag)
+import pytest
+from jaxlib import version as jaxlib_version
+
+import gearjax  # noqa: F401  (import sets them)
 from gearjax import _runtime
 
 
@@ -23,3 +29,58 @@ def test_flag_appended_to_existing(monkeypatch):
         warnings.simplefilter("ignore", RuntimeWarning)  # backends may already run here
         assert _runtime.configure_xla_flags() is True
     assert os.environ["XLA_FLAGS"] == f"--xla_foo=1 --{_runtime.FLAG}=false"
+
+
+@pytest.mark.parametrize(("version", "expected"), [
+    ("0.9.2", False), ("0.10.0", True), ("0.10.2", True), ("0.11.0", True), ("0.11.1", False),
+    ("0.11.1.dev20260801", False), ("0.10.3rc1", True), ("1.0.0", False),
+])
+def test_affected_jaxlib_versions(version, expected):
+    assert _runtime.affected(version) is expected
+
+
+def test_thread_pool_setting(monkeypatch):
+    for name in ("PJRT_NPROC", "NPROC"):
+        monkeypatch.delenv(name, raising=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        assert _runtime.configure_thread_pool("0.9.2") is False
+        assert "PJRT_NPROC" not in os.environ
+        assert _runtime.configure_thread_pool("0.10.2") is True
+        assert os.environ["PJRT_NPROC"] == "1"
+        monkeypatch.setenv("PJRT_NPROC", "4")  # the user's choice stays
+        assert _runtime.configure_thread_pool("0.10.2") is False
+        assert os.environ["PJRT_NPROC"] == "4"
+        monkeypatch.delenv("PJRT_NPROC")
+        monkeypatch.setenv("NPROC", "2")
+        assert _runtime.configure_thread_pool("0.10.2") is False
+        assert "PJRT_NPROC" not in os.environ
+
+
+# Two independent batched LU solves in one program, each above jaxlib's 2e5-flop threshold
+# for splitting its batch over XLA's pool. With jaxlib 0.10.2 on 2 cores and the concurrency-
+# optimised scheduler on, this program never returns once both calls run at once (5 of 5
+# tries hung without `PJRT_NPROC=1`, 0 of 5 with it, 2026-11-26,
+# `tools/diagnostics/issue12/lapack_deadlock.py`).
+DEADLOCK = textwrap.dedent("""
+    import gearjax, jax, jax.numpy as jnp
+    jax.config.update("jax_enable_x64", True)
+    k = jax.random.split(jax.random.PRNGKey(0), 4)
+    A1, A2 = (jax.random.normal(key, (4000, 10, 10)) + 5 * jnp.eye(10) for key in k[:2])
+    b1, b2 = (jax.random.normal(key, (4000, 10, 1)) for key in k[2:])
+    f = jax.jit(lambda A1, A2, b1, b2: (jnp.linalg.solve(A1, b1), jnp.linalg.solve(A2, b2)))
+    for i in range(20):
+        jax.block_until_ready(f(A1 + i * 1e-9, A2, b1, b2))
+    print("returned")
+""")
+
+
+@pytest.mark.skipif(not _runtime.affected(jaxlib_version.__version__), reason="jaxlib not affected")
+def test_batched_lapack_calls_side_by_side_return():
+    """gearjax's `PJRT_NPROC=1` alone (the scheduler flag turned back on) lets the program
+    above return: it hangs without it on this machine's kind (2 cores)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PJRT_NPROC", "NPROC")}
+    env["XLA_FLAGS"] = f"--{_runtime.FLAG}=true"
+    run = subprocess.run([sys.executable, "-c", DEADLOCK], env=env, capture_output=True, text=True, timeout=180)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.strip() == "returned"
