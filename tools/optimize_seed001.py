@@ -12,6 +12,11 @@ finds optima that do not exist at `default`). The optima,
 the standard (unmodified) pair and the paper's Table 2 optimum are then evaluated at the
 `default` accuracy over the three loads, beside the paper's Table 4. Writes the JSON results
 and the convergence figure (docs/figures/optimize_convergence.png).
+
+    python tools/optimize_seed001.py --reevaluate
+
+evaluates the stored designs again with the current code (after an engine fix) and
+rewrites only the JSON's `forces` table.
 """
 
 from __future__ import annotations
@@ -106,7 +111,17 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=8)
     parser.add_argument("--iterations", type=int, default=40)
     parser.add_argument("--robust-generations", type=int, default=10)
+    parser.add_argument("--reevaluate", action="store_true",
+                        help="only evaluate the designs stored in --out again with the current code (no search); "
+                             "updates its 'forces' table")
     args = parser.parse_args()
+    if args.reevaluate:
+        stored = json.loads(Path(args.out).read_text())
+        designs = {k: np.asarray(v) for k, v in stored["designs_mm"].items()}
+        stored["forces"] = {"fast": evaluate(designs, "fast"), "default": evaluate(designs, "default")}
+        Path(args.out).write_text(json.dumps(stored, indent=2))
+        print(json.dumps(stored["forces"], indent=1))
+        return
     if args.quick:
         args.population, args.generations, args.starts, args.iterations = 12, 6, 2, 8
 
