@@ -47,8 +47,8 @@ def space(scene):
 
 @pytest.fixture(scope="module")
 def designs(space):
-    """Paper optimum, a deep relief (the gradient's optimum at 1000 N·m in
-    `docs/results/optimize_seed001.json`, which engages flank on flank at 400-1600 N·m), and
+    """Paper optimum, a deep relief (the gradient's 1000 N·m optimum of the seed 001 search
+    run before issue #12's TCA fix, which engages flank on flank at 400-1600 N·m), and
     10 random designs (mm). (The short, deep relief used before, a GA optimum of the
     engine before issue #12's TCA fix, strikes with the tip edge since that fix.)"""
     rng = np.random.default_rng(3)
