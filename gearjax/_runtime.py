@@ -41,6 +41,8 @@ import warnings
 
 FLAG = "xla_cpu_enable_concurrency_optimized_scheduler"
 NPROC = "PJRT_NPROC"
+#: the variables XLA reads for its pool size, in this order; a value set by the user stays
+NPROC_VARIABLES = (NPROC, "NPROC")
 #: jaxlib versions [first, end) whose CPU LAPACK kernels split batches over XLA's pool.
 AFFECTED_JAXLIB = ((0, 10, 0), (0, 11, 1))
 
@@ -68,7 +70,7 @@ def configure_thread_pool(jaxlib_version: str | None = None) -> bool:
     `PJRT_NPROC` or `NPROC` (which XLA reads in that order), or when this jaxlib is not
     affected.
     """
-    if NPROC in os.environ or "NPROC" in os.environ:
+    if any(name in os.environ for name in NPROC_VARIABLES):
         return False
     if jaxlib_version is None:
         from jaxlib import version as _jaxlib_version

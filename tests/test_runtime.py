@@ -40,7 +40,7 @@ def test_affected_jaxlib_versions(version, expected):
 
 
 def test_thread_pool_setting(monkeypatch):
-    for name in ("PJRT_NPROC", "NPROC"):
+    for name in _runtime.NPROC_VARIABLES:
         monkeypatch.delenv(name, raising=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -79,7 +79,7 @@ DEADLOCK = textwrap.dedent("""
 def test_batched_lapack_calls_side_by_side_return():
     """gearjax's `PJRT_NPROC=1` alone (the scheduler flag turned back on) lets the program
     above return: it hangs without it on this machine's kind (2 cores)."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PJRT_NPROC", "NPROC")}
+    env = {k: v for k, v in os.environ.items() if k not in _runtime.NPROC_VARIABLES}
     env["XLA_FLAGS"] = f"--{_runtime.FLAG}=true"
     run = subprocess.run([sys.executable, "-c", DEADLOCK], env=env, capture_output=True, text=True, timeout=180)
     assert run.returncode == 0, run.stderr[-2000:]

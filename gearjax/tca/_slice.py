@@ -272,22 +272,19 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     return values, converged, failed.at[FLANK].set(failed[FLANK] | missed)
 
 
-def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int, relevant=True,
-                values=None, converged=None):
+def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinder, max_steps: int, relevant,
+                values, converged):
     """Solve candidate `candidate` (index into `CANDIDATES`) of one slice again with another
     solver (the TCA's fallback for failed Newton solves): its value, converged and failed
     as in `solve_candidates`. `relevant=False` (a padding entry of a fixed-size batch)
     solves the trivial problem $y = y_0$ in one step.
 
-    It starts where the first solve did. Given that solve's `values` (3, 3) and
-    `converged` (3,), a flank candidate that missed its contact (`_missed_flank`) starts
-    from the edge contact that proved it (plain Newton from there often runs past the tip
-    too) and still fails unless this solve ends on the active flanks."""
-    start = _starts(problem)[candidate]
-    missed = jnp.zeros(3, bool)
-    if values is not None:
-        missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
-        start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], start)
+    It starts where the first solve did, whose `values` (3, 3) and `converged` (3,) are
+    given; a flank candidate that missed its contact (`_missed_flank`) starts instead from
+    the edge contact that proved it (plain Newton from there often runs past the tip too)
+    and still fails unless this solve ends on the active flanks."""
+    missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
+    start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(problem)[candidate])
     value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
                                jnp.asarray(relevant))
     again = jnp.any(missed) & ~(ok & _on_active_flanks(problem.pair, value))
