@@ -21,12 +21,13 @@ continuous, and (envelope theorem) so is its derivative with respect to the pini
 
 An edge contact is the first contact only if it is a local maximum of $\Delta$ along the
 curve of coincident points, i.e. if $\Delta$ rises towards the tip there
-(`edge_is_first`). Where it falls instead, a flank contact inside the active flanks
-touches first; if the flank solve missed it (Newton went to a root beyond the tip, which
-the selection rejects), the flank candidate counts as failed and the analysis solves it
-again from the edge contact with the damped Newton (`solve_again`; issue #12: on random
-designs with deep reliefs the flank root beyond the tip hid the interior one at some
-pinion angles, so the slice value jumped by up to 3e-4 rad between neighbouring angles).
+(`edge_is_first`). Where it falls at the edge the selection would keep, a flank contact
+inside the active flanks touches first; if the flank solve missed it (Newton went to a
+root beyond the tip, which the selection rejects), the flank candidate counts as failed
+and the analysis solves it again from the edge contact with the damped Newton
+(`solve_again`; issue #12: on random designs with deep reliefs the flank root beyond the
+tip hid the interior one at some pinion angles, so the slice value jumped by up to 3e-4
+rad between neighbouring angles).
 
 Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
@@ -252,11 +253,17 @@ def edge_is_first(problem: SliceProblem, values):
 
 
 def _missed_flank(problem: SliceProblem, values, converged):
-    """Edge candidates (3,) that converged on the active flanks although a flank contact
-    inside them touches first (`edge_is_first` false): where the flank candidate is not
-    valid too, the flank solve missed its contact."""
+    """Edge candidates (3,) that `select_contact` would keep (valid, largest offset)
+    although a flank contact inside the active flanks touches first (`edge_is_first`
+    false): where the flank candidate is not valid too, the flank solve missed its contact.
+
+    Only the kept edge proves a miss: the offset rises inwards from an edge that is not
+    first, but the curve of coincident points may rise all the way to the other edge (the
+    double circular arc's convex-on-concave zones: from the pinion's tip to the gear's),
+    which is then valid, higher, and the slice's true contact."""
     ok = converged & _on_active_flanks(problem.pair, values)
-    return ok & ~edge_is_first(problem, values) & ~ok[FLANK]
+    kept = ok & (values[:, 2] >= jnp.max(jnp.where(ok, values[:, 2], -jnp.inf)))
+    return kept & ~edge_is_first(problem, values) & ~ok[FLANK]
 
 
 def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
