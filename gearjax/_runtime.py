@@ -19,10 +19,11 @@ kernels in opensource builds", 2026-07-21).
 - `PJRT_NPROC=1` (only for the affected jaxlib versions): XLA's CPU client sizes its intra-op
   pool from this variable (`DefaultThreadPoolSize` in XLA's PjRt utilities), and jaxlib's
   kernels never split a batch over a pool of one thread. This removes the deadlock; it also
-  runs each program's operations on one thread, which costs gearjax's programs little (they
-  are many small operations, not large matrix products; see `benchmarks/stages.py` figures
-  in the README) and nothing where processes already share the cores (pytest-xdist, a GA
-  population farmed out per process).
+  runs each program's operations on one thread: +10 % on one default scene's impact chain
+  (`benchmarks/stages.py`), but +60 % on the surface TCA of 100 designs batched on 2 cores
+  (`benchmarks/tca.py`; more with more cores), and nothing where processes already share
+  the cores (pytest-xdist, a GA population farmed out per process). A user who sets
+  `PJRT_NPROC` gets XLA's pool back, and the deadlock's risk with it.
 - `--xla_cpu_enable_concurrency_optimized_scheduler=false` in `XLA_FLAGS`: the first
   workaround, from before the cause was known. It made the deadlock rarer (fewer
   independent LAPACK calls scheduled side by side) but did not remove it. It only changes

@@ -69,8 +69,9 @@ def random_failures(groups):
 RANDOM_KNOWN = {
     "tca": "a TCA candidate solve fails on the active flank of a loaded slice, Newton and its damped "
            "fallback both (a contact may be missed): 2 of 150 designs on 17/170 (68: the gear-tip "
-           "edge solve diverges at one slice; 143, m_n 1.0 mm: flank solves run past the gear's "
-           "tip at 6 slices), 0 of 150 on 40/40",
+           "edge solve diverges at one slice; 143, m_n 1.0 mm: at 6 slices a real flank contact "
+           "at the start of the pinion's root relief, 0.05 mm inside the gear's tip (brute-force "
+           "scan), which Newton and the damped retry from the tip edge miss), 0 of 150 on 40/40",
 }
 
 
