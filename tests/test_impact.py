@@ -328,3 +328,17 @@ def test_first_contact_tangents_follow_the_root(seed_pair):
         fd = (np.asarray(primal(t + h, s.depth, bracket)) - np.asarray(primal(t - h, s.depth, bracket))) / (2 * float(h))
         assert np.all(np.abs(fd) > 0.0)
         assert np.asarray(tangents) == pytest.approx(fd, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_notebook_05_runs_in_this_process_with_its_programs(seed_pair):
+    """Notebook 05 (impact of the seed pair against load and speed, the regime map) runs
+    here rather than in a kernel (`_notebooks.py`): its scenes are this file's (`scene`),
+    so its `simulate` program is the one this file has compiled."""
+    from _notebooks import execute_in_process
+
+    ns = execute_in_process("05_mesh_in_impact.ipynb")
+    assert ns["acc"] == ACC
+    np.testing.assert_array_equal(np.asarray(ns["paper"]), np.asarray(PAPER))
+    assert [r.regime_name for r in ns["std"]] == [impact(seed_pair, PLAIN, t).regime_name for t in ns["loads"]]
+    assert float(ns["mod"][-1].force) == pytest.approx(float(impact(seed_pair, PAPER, 1600.0).force), rel=1e-12)

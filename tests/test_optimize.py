@@ -377,3 +377,21 @@ def test_a_start_that_never_had_a_finite_value_moves_to_the_centre():
     new = go.gradient_step(state, values, grads, cfg)
     np.testing.assert_allclose(new.position[0], 0.25)  # halfway from the corner to the centre
     assert new.best_value[1] == 1.0 and bool(jnp.all(new.position[1] < 1.0))  # a finite start steps downhill
+
+
+@pytest.mark.slow
+def test_notebook_06_runs_in_this_process_with_its_programs(objective, space):
+    """Notebook 06 (GA and gradient descent on this file's objective) runs here rather than
+    in a kernel (`_notebooks.py`): its gradient program, the one this file compiles for
+    2 starts, is never in the compilation cache, and a kernel compiled it a second time."""
+    from _notebooks import execute_in_process
+
+    ns = execute_in_process("06_optimisation.ipynb")
+    # the notebook's problem is this file's: one structure, so one compiled program
+    assert bool(eqx.tree_equal(ns["objective"], objective))
+    np.testing.assert_array_equal(np.asarray(ns["space"].lower), np.asarray(space.lower))
+    np.testing.assert_array_equal(np.asarray(ns["space"].upper), np.asarray(space.upper))
+    ga, gd = ns["ga"], ns["gd"]
+    assert gd.method == "gradient" and ga.method == "ga"
+    for r in (ga, gd):
+        assert np.isfinite(r.best_objective) and r.best_objective <= r.initial_objective
