@@ -328,3 +328,56 @@ def test_flank_contact_inside_a_steep_tip_relief_is_not_missed():
     np.testing.assert_allclose(te, np.broadcast_to(expected[:, None], te.shape), rtol=0, atol=1e-8)
     # and it is a flank contact, not the tip edge's (an interior maximum)
     assert np.all(np.asarray(result.kind == ContactKind.flank)[:, 0, :])
+
+
+def test_failed_solves_restart_from_bracketed_searches():
+    """The TCA's last resort for a candidate that Newton and the damped Newton both fail
+    (issue #12: `march_to_flank` for the flank, `edge_by_radius` for an edge), against
+    Newton where Newton converges, on the spur pair with the steep tip relief of the test
+    above: the march along the curve of coincident points brackets and bisects the flank
+    contact (the offset's maximum) to 1e-8 mm and 1e-14 rad; the radius equation gives the
+    pinion's tip edge on the gear flank to 1e-9 mm and 1e-14 rad, and no edge contact where
+    Newton's lies beyond the gear's start of active profile; the gear's tip circle
+    does not cross the pinion's active flank at these angles (Newton's gear-tip edge solve
+    fails too), so that edge is reported absent; past the pinion's tip, where the flank
+    solve runs past it, the march finds the interior maximum at the start of the relief,
+    above both edges."""
+    import optimistix as optx
+
+    from gearjax.tca._slice import _missed_flank, _offset_rate, edge_by_radius, make_problem, march_to_flank, solve_candidates
+
+    pair = InvoluteGearPair((29, 71), 2.2647, 19.2261, 0.0, 19.1957, (-0.2895, 0.1502),
+                            addendum_coefficient=1.0743, dedendum_coefficient=1.3243).resolve()
+    depth = FlankDepth(FlankModification(0.02716, 0.02701, 0.49686, 0.26748))
+    (lo1, hi1), (lo2, hi2) = (tuple(float(v) for v in pair.profile_limits(g)) for g in (0, 1))
+    rb1, tan_a = float(pair.base_radius[0]), math.tan(float(pair.working_pressure_angle))
+    conjugate = np.array([hi1 - 3.0, hi1 - 1.0, hi1 + 0.05])  # pinion roll length of the conjugate contact
+
+    @jax.jit
+    def searches(angle):
+        problem = make_problem(pair, depth, 0, 0.0, angle)
+        values, converged, _ = solve_candidates(problem, optx.Newton(rtol=1e-12, atol=1e-12), 64)
+        marched = march_to_flank(problem, values, converged, _missed_flank(problem, values, converged), 32)
+        rate = _offset_rate(problem, 2, marched[0])
+        return values, converged, marched, rate, edge_by_radius(problem, 1), edge_by_radius(problem, 2)
+
+    for u, angle in zip(conjugate, conjugate / rb1 - tan_a):
+        values, converged, (point, found, absent), rate, gear_edge, pinion_edge = searches(jnp.asarray(angle))
+        values, point = np.asarray(values), np.asarray(point)
+        assert bool(found) and not bool(absent)
+        assert not bool(converged[1]) and not bool(gear_edge[1]) and bool(gear_edge[2])
+        assert bool(converged[2])
+        if lo2 <= values[2, 1] <= hi2:
+            assert bool(pinion_edge[1]) and not bool(pinion_edge[2])
+            np.testing.assert_allclose(np.asarray(pinion_edge[0])[:2], values[2, :2], rtol=0, atol=1e-9)
+            assert abs(float(pinion_edge[0][2]) - values[2, 2]) < 1e-14
+        else:  # Newton's root lies beyond the gear's start of active profile: none on the flank
+            assert not bool(pinion_edge[1]) and bool(pinion_edge[2])
+        if u < hi1:  # Newton's flank contact
+            assert bool(converged[0])
+            np.testing.assert_allclose(point[:2], values[0, :2], rtol=0, atol=1e-8)
+            assert abs(point[2] - values[0, 2]) < 1e-14
+        else:  # Newton ran past the tip: the maximum at the start of the relief (0.267 mm)
+            assert not bool(converged[0])
+            assert hi1 - 0.3 < point[0] < hi1 - 0.2 and lo2 < point[1] < hi2
+            assert point[2] > values[2, 2] and abs(float(rate)) < 1e-6
