@@ -225,198 +225,31 @@ def _on_active_flanks(pair: AbstractFlankPair, values):
     return _within(values[..., 0], lim1, tol) & _within(values[..., 1], lim2, tol)
 
 
-def _offset_rate(problem: SliceProblem, row, y):
-    r"""Rate at which the offset rises towards the tip along the curve of coincident points,
-    at the point `y` $= (u_1, u_2, \Delta)$ of that curve, walking along the gear's flank
-    (`row` 1, towards its tip edge) or the pinion's (`row` 2); scaled to the sine of the
-    angle between the profile tangents, so zero where they are parallel (flank contact).
-
-    On that curve $X_1(u_1) = X_2(u_2, \Delta)$, so $t_1\,du_1 = t_2\,du_2 + g\,d\Delta$
-    with $t_i$ the profile tangents and $g = \partial X_2/\partial\Delta$; hence
-    $d\Delta/du_2 = -(t_1\times t_2)/(t_1\times g)$ and
-    $d\Delta/du_1 = (t_2\times t_1)/(t_2\times g)$."""
-    u1, u2, offset = y[0], y[1], y[2]
-    _, t1 = problem.pinion_tangent(u1)
-    _, t2 = problem.gear_tangent(u2, offset)
-    _, g = jax.jvp(lambda d: problem.gear_point(u2, d), (offset,), (jnp.ones_like(offset),))
-    gear_tip = -cross2(t1, t2) * jnp.sign(cross2(t1, g))
-    pinion_tip = cross2(t2, t1) * jnp.sign(cross2(t2, g))
-    return jnp.where(row == 1, gear_tip, pinion_tip) / (safe_norm(t1) * safe_norm(t2))
-
-
 def edge_is_first(problem: SliceProblem, values):
     r"""Whether each edge candidate (rows of `values`, (3, 3)) is a local maximum of the
     offset along the curve of coincident points (3,; True for the flank row).
 
-    The edge (the end $u = u_\text{tip}$ of its flank's active range) touches first only if
-    the offset rises towards it: `_offset_rate`, the sine of the angle between the
-    tangents, is not below $-10^3\varepsilon$."""
+    On that curve $X_1(u_1) = X_2(u_2, \Delta)$, so $t_1\,du_1 = t_2\,du_2 + g\,d\Delta$
+    with $t_i$ the profile tangents and $g = \partial X_2/\partial\Delta$; hence
+    $d\Delta/du_2 = -(t_1\times t_2)/(t_1\times g)$ at the gear's tip edge and
+    $d\Delta/du_1 = (t_2\times t_1)/(t_2\times g)$ at the pinion's. The edge (the end
+    $u = u_\text{tip}$ of its flank's active range) touches first only if the offset rises
+    towards it: the derivative, as the sine of the angle between the tangents, is not below
+    $-10^3\varepsilon$."""
 
     def first(row, y):
-        eps = float(jnp.finfo(jnp.result_type(y)).eps)
-        return (row == FLANK) | (_offset_rate(problem, row, y) >= -1e3 * eps)
+        u1, u2, offset = y[0], y[1], y[2]
+        _, t1 = problem.pinion_tangent(u1)
+        _, t2 = problem.gear_tangent(u2, offset)
+        _, g = jax.jvp(lambda d: problem.gear_point(u2, d), (offset,), (jnp.ones_like(offset),))
+        # the sign of d offset / d u along the curve, scaled to the sine between the tangents
+        gear_tip = -cross2(t1, t2) * jnp.sign(cross2(t1, g))
+        pinion_tip = cross2(t2, t1) * jnp.sign(cross2(t2, g))
+        rate = jnp.where(row == 1, gear_tip, pinion_tip) / (safe_norm(t1) * safe_norm(t2))
+        eps = float(jnp.finfo(jnp.result_type(offset)).eps)
+        return (row == FLANK) | (rate >= -1e3 * eps)
 
     return jax.vmap(first)(jnp.arange(3), values)
-
-
-def _coincident_residual(y, args):
-    r"""Coincident points with one flank's parameter held at `s`: unknowns $(u, \Delta)$,
-    $u$ the other flank's parameter (the gear's flank held for `row` 1, the pinion's for 2)."""
-    problem, row, s = args
-    u1 = jnp.where(row == 1, y[0], s)
-    u2 = jnp.where(row == 1, s, y[0])
-    return problem.pinion_point(u1) - problem.gear_point(u2, y[1])
-
-
-#: equal steps of the march along the walking flank, and bisections of the bracketing step
-MARCH_POINTS = 16
-MARCH_BISECTIONS = 32
-
-
-def march_to_flank(problem: SliceProblem, values, converged, missed, max_steps: int):
-    r"""Search for the flank contact of one slice along the curve of coincident points,
-    for where Newton and the damped Newton both fail (issue #12: they cycle at the jump in
-    curvature where a relief starts).
-
-    A flank contact is a local maximum of the offset $\Delta$ along the curve of points
-    where the flanks coincide ($X_1(u_1) = X_2(u_2, \Delta)$, one equation short of the
-    flank problem). The march walks along it from one flank's tip to its start of active
-    profile in `MARCH_POINTS` equal steps of that flank's parameter (each point a
-    2-equation Newton solve from the last; the gear's flank, or the pinion's where its tip
-    edge proved the miss or alone converged), and reads at each point whether the offset
-    rises inwards (`_offset_rate` $< 0$). A step from a point where it rises inwards to
-    one where it does not brackets a local maximum; the highest is bisected
-    `MARCH_BISECTIONS` times. A bracketed search does not depend on the curvature. The
-    march follows the branch of the curve through the walking flank's tip edge contact
-    (or its start, `_starts`); its points stop counting once the branch has left the
-    active flanks (the other flank's parameter beyond its limits).
-
-    Args:
-        values, converged, missed: the slice's candidates (3, 3), (3,) and
-            `_missed_flank` (3,).
-
-    Returns:
-        `(point, found, absent)`: the start (3,) for a flank solve, whether a maximum was
-        bracketed, and whether the march shows that there is none on the active flanks
-        (it started from a converged edge contact, every point that counts solved, and
-        no bracket: the offset's largest value on them is at an end of the branch's
-        stretch on the active flanks, which the edge candidates or the limits of the
-        active flanks take). No derivative passes
-        through the march: the flank solve that starts from its point carries them
-        (implicit function).
-    """
-    problem, values = jax.lax.stop_gradient((problem, values))
-    row = jnp.where(jnp.any(missed), jnp.argmax(missed), jnp.where(~converged[1] & converged[2], 2, 1))
-    walk = jnp.where(row == 1, 1, 0)  # index of the walking parameter in (u1, u2, Δ)
-    limits = jnp.stack([jnp.stack(problem.pair.profile_limits(0)), jnp.stack(problem.pair.profile_limits(1))])
-    lo, hi = limits[walk, 0], limits[walk, 1]
-    start = jnp.where(converged[row], values[row], _starts(problem)[row])
-    tol = 8 * float(jnp.finfo(values.dtype).eps) ** 0.75
-
-    def point(s, guess):
-        """(u1, u2, Δ) on the curve at walking parameter s, by Newton from `guess` (3,)."""
-        y0 = jnp.stack([jnp.where(row == 1, guess[0], guess[1]), guess[2]])
-        sol = optx.root_find(_coincident_residual, optx.Newton(rtol=tol, atol=tol), y0, args=(problem, row, s),
-                             max_steps=max_steps, throw=False, adjoint=ADJOINT)
-        y = sol.value
-        full = jnp.stack([jnp.where(row == 1, y[0], s), jnp.where(row == 1, s, y[0]), y[1]])
-        return full, sol.result == optx.RESULTS.successful
-
-    def rises_inwards(y, ok):
-        return ok & (_offset_rate(problem, row, y) < 0)
-
-    def march(last, k):
-        y, ok = point(hi - (hi - lo) * k / MARCH_POINTS, last)
-        return jnp.where(ok, y, last), (y, ok, rises_inwards(y, ok))
-
-    steps = jnp.arange(MARCH_POINTS + 1, dtype=values.dtype)
-    _, (ys, oks, rises) = jax.lax.scan(march, start, steps)
-    # Points count from the start to the first one past where the branch, having been on
-    # the active flanks, leaves them (its other parameter beyond its flank's limits):
-    # further on, a maximum would not be a contact on the active flanks.
-    inside = oks & _on_active_flanks(problem.pair, ys)
-    entered = jnp.cumsum(inside) > 0
-    left = jnp.cumsum(entered & ~inside) > 0
-    counts = ~jnp.concatenate([jnp.zeros(1, bool), left[:-1]])
-    # step k, from point k (rising inwards) to point k + 1 (not), one of them on the flanks
-    bracket = counts[1:] & (inside[:-1] | inside[1:]) & rises[:-1] & oks[1:] & ~rises[1:]
-    height = jnp.where(bracket, jnp.maximum(ys[:-1, 2], ys[1:, 2]), -jnp.inf)
-    k = jnp.argmax(height)
-    found = jnp.any(bracket)
-    absent = ~found & jnp.all(oks | ~counts) & converged[row]
-
-    def bisect(_, carry):
-        outer, inner = carry  # the offset rises inwards at `outer`, not at `inner`
-        y, ok = point(0.5 * (inner[walk] + outer[walk]), outer)
-        up = rises_inwards(y, ok)
-        return jnp.where(up, y, outer), jnp.where(up, inner, y)
-
-    outer, inner = jax.lax.fori_loop(0, MARCH_BISECTIONS, bisect, (ys[k], ys[k + 1]))
-    return 0.5 * (inner + outer), found, absent
-
-
-#: bisections of the radius equation of an edge contact (`edge_by_radius`)
-EDGE_BISECTIONS = 48
-
-
-def edge_by_radius(problem: SliceProblem, row):
-    r"""The edge contact of candidate `row` (1: the gear's tip edge on the pinion flank,
-    2: the pinion's on the gear flank) from its radius equation, for where Newton and the
-    damped Newton both fail on the edge problem (issue #12: one slice of a random 17/170
-    design diverged).
-
-    The gear's offset turns its flank about its own axis, so the gear's tip corner keeps
-    its distance $r_c$ from that axis: it touches the pinion flank at the point
-    $X_1(u_1)$ whose distance from the gear's axis is $r_c$, found by bisection over the
-    pinion's active flank, and $\Delta$ is the angle that takes the corner there. (The
-    pinion's tip corner likewise meets the gear flank at the point $X_2(u_2, 0)$ at its
-    distance from the gear's axis.) The bisection assumes that this distance changes
-    monotonically along the active flank, as it does on an involute's.
-
-    Returns:
-        `(point, found, absent)`: the edge contact (3,) as a start for the edge solve,
-        whether the radius is crossed on the active flank, and whether it is not (the
-        distance does not reach $r_c$ at either end of the flank: the edge cannot touch
-        on the active flank). No derivative passes through it: the edge solve that starts
-        from its point carries them.
-    """
-    problem = jax.lax.stop_gradient(problem)
-    pair = problem.pair
-    center = pair.center(1)
-    zero = jnp.zeros_like(problem.z)
-    (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
-    gear_edge = row == 1
-    corner = jnp.where(gear_edge, problem.gear_point(hi2, zero), problem.pinion_point(hi1))
-    radius = safe_norm(corner - center)
-    lo, hi = jnp.where(gear_edge, lo1, lo2), jnp.where(gear_edge, hi1, hi2)
-
-    def on_flank(u):  # the flank point that the corner can reach, at offset 0 for the gear
-        return jnp.where(gear_edge, problem.pinion_point(u), problem.gear_point(u, zero))
-
-    def excess(u):
-        return safe_norm(on_flank(u) - center) - radius
-
-    f_lo, f_hi = excess(lo), excess(hi)
-    found = (f_lo <= 0) != (f_hi <= 0)
-
-    def bisect(_, carry):
-        a, b, fa = carry
-        m = 0.5 * (a + b)
-        fm = excess(m)
-        same = (fm <= 0) == (fa <= 0)
-        return jnp.where(same, m, a), jnp.where(same, b, m), jnp.where(same, fm, fa)
-
-    a, b, _ = jax.lax.fori_loop(0, EDGE_BISECTIONS, bisect, (lo, hi, f_lo))
-    u = 0.5 * (a + b)
-    # the offset that turns the corner (gear edge) or the gear's flank point (pinion edge)
-    # onto its mate, measured in the sense in which the offset turns the gear
-    moving = jnp.where(gear_edge, corner, on_flank(u)) - center
-    target = jnp.where(gear_edge, on_flank(u), corner) - center
-    _, turn = jax.jvp(lambda d: problem.gear_point(hi2, d), (zero,), (jnp.ones_like(zero),))
-    sense = jnp.sign(cross2(problem.gear_point(hi2, zero) - center, turn))
-    angle = jnp.arctan2(cross2(moving, target), jnp.dot(moving, target)) * sense
-    point = jnp.where(gear_edge, jnp.stack([u, hi2, angle]), jnp.stack([hi1, u, angle]))
-    return point, found, ~found
 
 
 def _missed_flank(problem: SliceProblem, values, converged):
@@ -455,30 +288,12 @@ def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinde
 
     It starts where the first solve did, whose `values` (3, 3) and `converged` (3,) are
     given; a flank candidate that missed its contact (`_missed_flank`) starts instead from
-    the edge contact that proved it (plain Newton from there often runs past the tip too).
-    A solve that does not end on the active flanks starts once more: a flank solve from
-    the offset's maximum that `march_to_flank` brackets, an edge solve from its radius
-    equation (`edge_by_radius`); where these searches show that the candidate has no
-    contact on the active flanks, it counts as solved without one. A missed flank still
-    fails unless a solve ends on the active flanks."""
+    the edge contact that proved it (plain Newton from there often runs past the tip too)
+    and still fails unless this solve ends on the active flanks."""
     missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
     start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(problem)[candidate])
-    selector = jnp.eye(3, dtype=problem.z.dtype)[candidate]
-    value, ok, failed = _solve(problem, solver, max_steps, start, selector, jnp.asarray(relevant))
-    # A solve that fails again starts once more: a flank solve from the offset's maximum
-    # along the curve of coincident points, an edge solve from its radius equation; or
-    # the search shows that the candidate has no contact on the active flanks.
-    marched, found, absent = march_to_flank(problem, values, converged, missed, max_steps)
-    edge, edge_found, edge_absent = edge_by_radius(problem, candidate)
-    is_flank = candidate == FLANK
-    marched, found, absent = (jnp.where(is_flank, a, b) for a, b in ((marched, edge), (found, edge_found),
-                                                                      (absent, edge_absent)))
-    march = ~(ok & _on_active_flanks(problem.pair, value))
-    use = march & found
-    value2, ok2, failed2 = _solve(problem, solver, max_steps, jnp.where(use, marched, start), selector,
-                                  jnp.asarray(relevant) & use)
-    value, ok, failed = (jnp.where(use, a, b) for a, b in ((value2, value), (ok2, ok), (failed2, failed)))
-    failed = failed & ~(march & ~found & absent)
+    value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
+                               jnp.asarray(relevant))
     again = jnp.any(missed) & ~(ok & _on_active_flanks(problem.pair, value))
     return value, ok, failed | (again & relevant)
 
