@@ -37,15 +37,17 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
-#: Approximate cost (s) of each test file in one whole run on 2 cores (`--durations=0`,
-#: 2026-11-26, after notebooks 05 and 06 moved into their host files; the machine was also
-#: busy with other work, so every figure is high); only the schedule uses them.
+#: Approximate cost (s) of each test file in one whole run on 2 cores (2026-11-26,
+#: `GEARJAX_TEST_PROFILE` and `tools/test_profile.py`; the machine also ran a 4-minute test
+#: beside the first files). Only the schedule uses them; in that run the two workers were
+#: busy 2 065 and 2 067 s, 77 % of it tracing and compiling in their own processes
+#: (notebook kernels and command-line subprocesses not counted).
 FILE_COSTS = {
-    "test_optimize.py": 654, "test_sweep.py": 570, "test_impact.py": 496, "test_notebooks.py": 437,
-    "test_ltca.py": 374, "test_hard_cases.py": 323, "test_results.py": 290,
-    "test_hard_cases_curvilinear.py": 246, "test_hard_cases_double_arc.py": 235, "test_tca.py": 215,
-    "test_transforms.py": 194, "test_cli.py": 173, "test_hard_cases_ratios.py": 169, "test_curvilinear.py": 160,
-    "test_scene.py": 118, "test_cache.py": 91, "test_resources.py": 26, "test_double_arc.py": 25,
+    "test_optimize.py": 683, "test_sweep.py": 491, "test_notebooks.py": 465, "test_impact.py": 378,
+    "test_ltca.py": 282, "test_results.py": 248, "test_hard_cases.py": 247,
+    "test_hard_cases_double_arc.py": 198, "test_hard_cases_curvilinear.py": 197, "test_tca.py": 181,
+    "test_transforms.py": 156, "test_hard_cases_ratios.py": 137, "test_cli.py": 129, "test_curvilinear.py": 111,
+    "test_scene.py": 101, "test_cache.py": 54, "test_double_arc.py": 30, "test_resources.py": 23,
 }
 
 
@@ -92,6 +94,41 @@ def forbid(monkeypatch):
             monkeypatch.setattr(module, name, refuse)
 
     return patch
+
+
+#: `GEARJAX_TEST_PROFILE=FILE`: each worker appends one JSON line per test file to FILE
+#: (worker, start and wall time, and the seconds its process spent tracing, lowering and
+#: compiling, with the persistent-cache hits and misses), from which `FILE_COSTS` and the
+#: worker balance are read (`tools/test_profile.py`).
+PROFILE = os.environ.get("GEARJAX_TEST_PROFILE")
+_COUNTS: dict = {}
+if PROFILE:
+    import jax.monitoring
+
+    def _count(event, value=1.0, **kwargs):
+        _COUNTS[event] = _COUNTS.get(event, 0.0) + value
+
+    jax.monitoring.register_event_duration_secs_listener(lambda e, s, **kw: _count(e, s))
+    jax.monitoring.register_event_listener(lambda e, **kw: _count(e))
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _profile_file(request):
+    """One line of `GEARJAX_TEST_PROFILE` per test file (nothing when it is not set)."""
+    if not PROFILE:
+        yield
+        return
+    import json
+    import time
+
+    before, start = dict(_COUNTS), time.time()
+    yield
+    spent = {k.rsplit("/", 1)[-1]: round(v - before.get(k, 0.0), 2) for k, v in _COUNTS.items()
+             if k.startswith(("/jax/core/compile/", "/jax/compilation_cache/cache_")) and v != before.get(k, 0.0)}
+    line = dict(file=request.path.name, worker=os.environ.get("PYTEST_XDIST_WORKER", "main"),
+                start=round(start, 1), wall_s=round(time.time() - start, 1), **spent)
+    with open(PROFILE, "a") as f:
+        f.write(json.dumps(line) + "\n")
 
 
 @pytest.fixture(autouse=True, scope="module")

@@ -30,6 +30,9 @@ def main() -> None:
     env = {k: v for k, v in os.environ.items() if k not in ("PJRT_NPROC", "NPROC")}
     env["XLA_FLAGS"] = "--xla_cpu_enable_concurrency_optimized_scheduler=true"
     program = DEADLOCK if args.gearjax else DEADLOCK.replace("import gearjax, ", "import ")
+    if not args.gearjax and program == DEADLOCK:  # the test's program changed: it would import gearjax
+        sys.exit("lapack_deadlock.py: tests/test_runtime.py's DEADLOCK no longer starts with "
+                 "'import gearjax, ': update how this script leaves gearjax out")
     hung = 0
     for _ in range(args.tries):
         try:
