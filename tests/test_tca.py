@@ -328,3 +328,62 @@ def test_flank_contact_inside_a_steep_tip_relief_is_not_missed():
     np.testing.assert_allclose(te, np.broadcast_to(expected[:, None], te.shape), rtol=0, atol=1e-8)
     # and it is a flank contact, not the tip edge's (an interior maximum)
     assert np.all(np.asarray(result.kind == ContactKind.flank)[:, 0, :])
+
+
+def test_coincident_search_finds_newtons_contacts_and_the_one_newton_misses():
+    """The TCA's last resort for a candidate that Newton and the damped Newton both fail
+    (issue #12: `coincident_search`, the largest offset along the curve of coincident
+    points parametrised by the radius about the gear's axis), against Newton where Newton
+    converges, on the spur pair with the steep tip relief of the test above: the flank
+    contact to 1e-13 rad, and in radius to 3e-6 mm (the offset is flat at its maximum: it
+    falls by ~9e-14 rad 1e-5 mm away, and its rounding, ~1.5e-15 rad, hides the fall
+    within ~1.3e-6 mm; measured 2026-11-26), the pinion's tip edge on
+    the gear flank to 1e-9 mm and 1e-14 rad where Newton's root lies on the gear's active
+    flank (and none on the curve where it does not); the gear's tip circle does not cross
+    the pinion's active flank at these angles (Newton's gear-tip edge solve fails too), so
+    that edge is off the curve; past the pinion's tip, where the flank solve runs past it,
+    the search finds the interior maximum at the start of the relief (0.267 mm from the
+    tip), above both edges, where the offset's rate along the flank is zero."""
+    import optimistix as optx
+
+    from gearjax.tca._slice import SEARCH_POINTS, SEARCH_ROUNDS, coincident_search, make_problem, solve_candidates
+
+    pair = InvoluteGearPair((29, 71), 2.2647, 19.2261, 0.0, 19.1957, (-0.2895, 0.1502),
+                            addendum_coefficient=1.0743, dedendum_coefficient=1.3243).resolve()
+    depth = FlankDepth(FlankModification(0.02716, 0.02701, 0.49686, 0.26748))
+    (lo1, hi1), (lo2, hi2) = (tuple(float(v) for v in pair.profile_limits(g)) for g in (0, 1))
+    rb1, tan_a = float(pair.base_radius[0]), math.tan(float(pair.working_pressure_angle))
+    conjugate = np.array([hi1 - 3.0, hi1 - 1.0, hi1 + 0.05])  # pinion roll length of the conjugate contact
+
+    @jax.jit
+    def searches(angle):
+        problem = make_problem(pair, depth, 0, 0.0, angle)
+        values, converged, _ = solve_candidates(problem, optx.Newton(rtol=1e-12, atol=1e-12), 64)
+        search = coincident_search(problem)
+        # distance from the gear's axis of the gear's flank points: Newton's flank contact,
+        # the search's, and the range of the gear's active flank (which bounds the search's)
+        radius = jax.vmap(lambda u: jnp.linalg.norm(problem.gear_point(u, 0.0) - pair.center(1)))
+        return values, converged, search, radius(jnp.stack([values[0, 1], search.best[1], lo2, hi2]))
+
+    for u, angle in zip(conjugate, conjugate / rb1 - tan_a):
+        values, converged, search, radii = searches(jnp.asarray(angle))
+        values, best, edges = np.asarray(values), np.asarray(search.best), np.asarray(search.edges)
+        assert bool(search.interior)
+        assert not bool(converged[1]) and not bool(search.edge_on[0])
+        assert bool(converged[2])
+        if lo2 <= values[2, 1] <= hi2:
+            assert bool(search.edge_on[1])
+            np.testing.assert_allclose(edges[1, :2], values[2, :2], rtol=0, atol=1e-9)
+            assert abs(edges[1, 2] - values[2, 2]) < 1e-14
+        else:  # Newton's root lies beyond the gear's start of active profile: off the curve
+            assert not bool(search.edge_on[1])
+        if u < hi1:  # Newton's flank contact
+            assert bool(converged[0])
+            window = float(radii[3] - radii[2]) * (2 / (SEARCH_POINTS - 1)) ** SEARCH_ROUNDS
+            assert window < 1e-6 and abs(float(radii[1] - radii[0])) < 3e-6
+            np.testing.assert_allclose(best[:2], values[0, :2], rtol=0, atol=1e-5)
+            assert abs(best[2] - values[0, 2]) < 1e-13
+        else:  # Newton ran past the tip: the maximum at the start of the relief (0.267 mm)
+            assert not bool(converged[0])
+            assert hi1 - 0.3 < best[0] < hi1 - 0.2 and lo2 < best[1] < hi2
+            assert best[2] > values[2, 2]
