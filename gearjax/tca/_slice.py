@@ -32,9 +32,8 @@ rad between neighbouring angles).
 Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
 `args`; the analysis solves the candidates whose Newton solve failed again with a damped
-Newton (`gearjax._newton.SafeguardedNewton`), started from a search along the curve of
-coincident points that needs no derivatives (`coincident_search`); failures are reported
-(`converged`), never thrown.
+Newton (`gearjax._newton.SafeguardedNewton`); failures are reported (`converged`), never
+thrown.
 """
 
 from __future__ import annotations
@@ -253,118 +252,6 @@ def edge_is_first(problem: SliceProblem, values):
     return jax.vmap(first)(jnp.arange(3), values)
 
 
-#: radii sampled per round of `coincident_search`, its rounds, and the bisections that
-#: find a flank's point at a radius
-SEARCH_POINTS = 9
-SEARCH_ROUNDS = 12
-RADIUS_BISECTIONS = 44
-
-
-class CoincidentSearch(eqx.Module):
-    r"""What `coincident_search` finds on one slice: the first contact along the curve of
-    coincident points (`best`, $(u_1, u_2, \Delta)$), whether it lies inside the curve's
-    stretch on the active flanks (`interior`: a flank contact) and, for the gear's and the
-    pinion's tip edge, their points on the curve (`edges`, (2, 3)) and whether the tip
-    corner's radius lies on that stretch (`edge_on`, (2,))."""
-
-    best: Float[Array, "3"]
-    interior: Array
-    edges: Float[Array, "2 3"]
-    edge_on: Array
-
-
-def _at_radius(points, lo, hi, rising, radius, center):
-    """The flank points `points(u)` ((2,) -> (2, 2): one point on each flank), `u` in
-    `[lo, hi]` (2,), at distance `radius` from `center`, by bisection on both flanks at once;
-    `rising` (2,): whether the distance grows from `lo` to `hi`. Returns `u` (2,) and the
-    points (2, 2) of the last bisection, within $2^{-44}$ of each range of the crossing.
-
-    The point where the distance crosses `radius` if it changes monotonically along the
-    flank, as the gear's own flank does about its axis; the pinion's flank about the
-    gear's axis does too except near its start of active profile, where the distance
-    peaks late in the mesh (measured on a 29/71 pair), and the bisection then finds one of
-    the crossings."""
-
-    def halve(_, carry):
-        a, b, _, _ = carry
-        m = 0.5 * (a + b)
-        x = points(m)
-        beyond = (safe_norm(x - center, axis=-1) > radius) == rising  # the crossing lies below m
-        return jnp.where(beyond, a, m), jnp.where(beyond, m, b), m, x
-
-    start = (lo, hi, lo, jnp.zeros((2, 2), dtype=lo.dtype))
-    _, _, u, x = jax.lax.fori_loop(0, RADIUS_BISECTIONS, halve, start)
-    return u, x
-
-
-def coincident_search(problem: SliceProblem) -> CoincidentSearch:
-    r"""The first contact of one slice by a search without derivatives, for where Newton and
-    the damped Newton both fail (issue #12: they cycle where a relief's curvature jumps, or
-    run to a root beyond a tip that hides the interior contact).
-
-    The gear's offset turns its flank about its own axis, so a gear flank point keeps its
-    distance $\rho$ from that axis. The flanks can meet at $\rho$ where both reach it: at
-    the gear's point $X_2(u_2(\rho), 0)$ and the pinion's point $X_1(u_1(\rho))$ at that
-    distance from the gear's axis (each by bisection, `_at_radius`), after turning the gear
-    by $\Delta(\rho)$, the angle between them. These points form the curve of coincident
-    points, parametrised by $\rho$ over the radii that both active flanks reach; the slice
-    touches first at the largest $\Delta(\rho)$: inside the range a flank contact (a
-    tangency), at an end the tip edge whose corner lies there (or no contact on the active
-    flanks, where the end is a start of active profile). The largest value comes from
-    `SEARCH_POINTS` samples of the range, then of a window of two sample spacings about the
-    best sample, `SEARCH_ROUNDS` times (the window shrinks fourfold per round). It finds the
-    highest maximum where the samples resolve it, whatever the curvature; its point starts
-    a Newton solve, which carries the derivatives (none pass through the search). Each flank
-    point function is traced twice (ends, bisection), to keep the TCA's program small.
-    """
-    problem = jax.lax.stop_gradient(problem)
-    pair = problem.pair
-    center = pair.center(1)
-    zero = jnp.zeros_like(problem.z)
-    (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
-
-    def gear(u):
-        return problem.gear_point(u, zero)
-
-    # distances from the gear's axis of the active flanks' ends (start of active profile, tip)
-    r1 = safe_norm(jax.vmap(problem.pinion_point)(jnp.stack([lo1, hi1])) - center, axis=-1)
-    r2 = safe_norm(jax.vmap(gear)(jnp.stack([lo2, hi2])) - center, axis=-1)
-    low = jnp.maximum(jnp.min(r1), jnp.min(r2))
-    high = jnp.minimum(jnp.max(r1), jnp.max(r2))
-
-    def points(u):  # the pinion's flank point at u[0], the gear's at u[1] (offset 0)
-        return jnp.stack([problem.pinion_point(u[0]), gear(u[1])])
-
-    rising = jnp.stack([r1[1] > r1[0], r2[1] > r2[0]])
-
-    def on_curve(rho):
-        (u1, u2), x = _at_radius(points, jnp.stack([lo1, lo2]), jnp.stack([hi1, hi2]), rising, rho, center)
-        moving, target = x[1] - center, x[0] - center
-        # the gear turns in the negative sense as its offset grows (`slice_point`)
-        offset = -jnp.arctan2(cross2(moving, target), jnp.dot(moving, target))
-        return jnp.stack([u1, u2, offset])
-
-    tips = jnp.clip(jnp.stack([r2[1], r1[1]]), low, high)  # gear's tip corner, pinion's
-
-    def refine(k, carry):
-        a, b, best, edges = carry
-        rhos = jnp.concatenate([jnp.linspace(a, b, SEARCH_POINTS), tips])
-        points = jax.vmap(on_curve)(rhos)
-        i = jnp.argmax(points[:SEARCH_POINTS, 2])
-        step = (b - a) / (SEARCH_POINTS - 1)
-        return (jnp.maximum(rhos[i] - step, low), jnp.minimum(rhos[i] + step, high), points[i],
-                jnp.where(k == 0, points[SEARCH_POINTS:], edges))
-
-    nan = jnp.full(3, jnp.nan, dtype=zero.dtype)
-    a, b, best, edges = jax.lax.fori_loop(0, SEARCH_ROUNDS, refine, (low, high, nan, jnp.stack([nan, nan])))
-    overlap = low < high
-    # the last window (two sample spacings) still reaches an end: the maximum is there
-    interior = overlap & (a > low) & (b < high)
-    tip_radii = jnp.stack([r2[1], r1[1]])
-    edge_on = overlap & (tip_radii >= low) & (tip_radii <= high)
-    return CoincidentSearch(best=best, interior=interior, edges=edges, edge_on=edge_on)
-
-
 def _missed_flank(problem: SliceProblem, values, converged):
     """Edge candidates (3,) that `select_contact` would keep (valid, largest offset)
     although a flank contact inside the active flanks touches first (`edge_is_first`
@@ -399,27 +286,16 @@ def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinde
     as in `solve_candidates`. `relevant=False` (a padding entry of a fixed-size batch)
     solves the trivial problem $y = y_0$ in one step.
 
-    It starts from the candidate's point of the search along the curve of coincident
-    points (`coincident_search`): the offset's largest interior value for the flank, the
-    tip corner's radius for an edge. Where the search shows that the candidate has no
-    contact on the active flanks (the largest value at an end of the curve, or the corner's
-    radius off it), the candidate counts as solved without a contact; otherwise it starts
-    where the first solve did, whose `values` (3, 3) and `converged` (3,) are given, or,
-    for a flank candidate that missed its contact (`_missed_flank`), from the edge contact
-    that proved it. A missed flank still fails unless this solve ends on the active
-    flanks."""
+    It starts where the first solve did, whose `values` (3, 3) and `converged` (3,) are
+    given; a flank candidate that missed its contact (`_missed_flank`) starts instead from
+    the edge contact that proved it (plain Newton from there often runs past the tip too)
+    and still fails unless this solve ends on the active flanks."""
     missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
     start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(problem)[candidate])
-    # The search along the curve of coincident points gives a start close to the contact,
-    # or shows that the candidate has none on the active flanks.
-    search = coincident_search(problem)
-    edge = jnp.maximum(candidate - 1, 0)
-    found = jnp.where(candidate == FLANK, search.interior, search.edge_on[edge])
-    start = jnp.where(found, jnp.where(candidate == FLANK, search.best, search.edges[edge]), start)
     value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
                                jnp.asarray(relevant))
     again = jnp.any(missed) & ~(ok & _on_active_flanks(problem.pair, value))
-    return value, ok, (failed | (again & relevant)) & found
+    return value, ok, failed | (again & relevant)
 
 
 def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceContact:
