@@ -194,6 +194,15 @@ def relevance(problem: SliceProblem):
     return jnp.stack([flank, gear_edge, pinion_edge])
 
 
+def frozen(tree):
+    """`tree` with `jax.lax.stop_gradient` on its inexact arrays: for the parts of a solve
+    whose outputs carry no derivative (starting points, screening, the choice of
+    candidates), so that differentiating the TCA does not trace their tangents. The
+    solutions' derivatives come from the implicit adjoint at the root, which does not
+    depend on where Newton started."""
+    return jax.tree_util.tree_map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x, tree)
+
+
 def _solve(problem, solver, max_steps, y0, selector, relevant):
     """One candidate solve: its value, converged (successful and relevant), and failed
     (relevant, unsuccessful, last iterate on the active flanks: where the solve may have
@@ -204,6 +213,7 @@ def _solve(problem, solver, max_steps, y0, selector, relevant):
     pair = problem.pair
     dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
     one = jnp.ones_like(dom1[0])
+    y0 = jax.lax.stop_gradient(y0)
     options = dict(lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one]))
     sol = optx.root_find(
         _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
@@ -273,9 +283,10 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     contact proves that its solve missed an interior contact, `_missed_flank`: the TCA
     solves those again with `solve_again`)."""
     selectors = jnp.eye(3, dtype=problem.z.dtype)
+    fixed = frozen(problem)
     values, converged, failed = jax.vmap(ft.partial(_solve, problem, solver, max_steps))(
-        _starts(problem), selectors, relevance(problem))
-    missed = jnp.any(_missed_flank(problem, values, converged))
+        _starts(fixed), selectors, relevance(fixed))
+    missed = jnp.any(_missed_flank(fixed, frozen(values), converged))
     return values, converged, failed.at[FLANK].set(failed[FLANK] | missed)
 
 
@@ -290,8 +301,9 @@ def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinde
     given; a flank candidate that missed its contact (`_missed_flank`) starts instead from
     the edge contact that proved it (plain Newton from there often runs past the tip too)
     and still fails unless this solve ends on the active flanks."""
-    missed = _missed_flank(problem, values, converged) & (candidate == FLANK)
-    start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(problem)[candidate])
+    fixed, values = frozen(problem), frozen(values)
+    missed = _missed_flank(fixed, values, converged) & (candidate == FLANK)
+    start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(fixed)[candidate])
     value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
                                jnp.asarray(relevant))
     again = jnp.any(missed) & ~(ok & _on_active_flanks(problem.pair, value))
