@@ -39,6 +39,31 @@ def test_affected_jaxlib_versions(version, expected):
     assert _runtime.affected(version) is expected
 
 
+def test_compiler_flag_set_on_import_for_the_measured_jaxlib():
+    expected = _runtime._in_range(jaxlib_version.__version__, _runtime.COMPILER_JAXLIB, unknown=False)
+    assert (f"--{_runtime.COMPILER_FLAG}=false" in os.environ["XLA_FLAGS"]) is expected
+
+
+@pytest.mark.parametrize(("version", "expected"), [
+    ("0.9.2", False), ("0.10.0", True), ("0.10.2", True), ("0.10.9rc1", True), ("0.11.0", False),
+    ("1.0.0", False), ("nightly", False),
+])
+def test_compiler_flag_only_for_the_measured_jaxlib_versions(monkeypatch, version, expected):
+    """An XLA flag that a jaxlib does not know aborts the process: unknown versions and
+    version strings get none."""
+    monkeypatch.setenv("XLA_FLAGS", "--xla_foo=1")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # backends may already run here
+        assert _runtime.configure_compiler(version) is expected
+    assert os.environ["XLA_FLAGS"] == "--xla_foo=1" + (f" --{_runtime.COMPILER_FLAG}=false" if expected else "")
+
+
+def test_compiler_flag_user_choice_respected(monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", f"--{_runtime.COMPILER_FLAG}=true")
+    assert _runtime.configure_compiler("0.10.2") is False
+    assert os.environ["XLA_FLAGS"] == f"--{_runtime.COMPILER_FLAG}=true"
+
+
 def test_thread_pool_setting(monkeypatch):
     for name in _runtime.NPROC_VARIABLES:
         monkeypatch.delenv(name, raising=False)
