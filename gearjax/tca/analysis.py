@@ -146,7 +146,9 @@ def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
     contacts at `fast`). The failures are gathered into a fixed number of problems
     (`fallback_capacity`; failures beyond it stay failed), solved from their starts and
     scattered back, so the fallback costs a few dozen solves whatever the grid's size, and
-    every candidate Newton solved keeps its value; it is skipped where none failed. A flank
+    every candidate Newton solved keeps its value; a single analysis skips it where none
+    failed, but under `vmap` (batched designs, sweeps) the condition is batched and the
+    fallback runs for every entry of the batch (so whatever it costs, every batch pays). A flank
     solve that an edge contact proved to have missed an interior contact (`solve_again`)
     starts from that edge contact; such misses are many on designs with deep reliefs (121
     slices of one cycle on random 29/71 design 0), hence one in 16, not 64 as for the
