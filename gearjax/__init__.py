@@ -6,7 +6,7 @@ stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-
 reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. On
 import it sets, unless already set, `PJRT_NPROC=1` (with jaxlib 0.10.0-0.11.0) and one XLA
 CPU flag in `XLA_FLAGS`, against a deadlock of jaxlib's CPU LAPACK kernels, and (with
-jaxlib 0.10.x) a second XLA flag that compiles its programs about a quarter faster; see
+jaxlib 0.10.x) a second XLA flag that compiles its programs 14-47 % faster; see
 `gearjax._runtime`.
 """
 

@@ -194,15 +194,6 @@ def relevance(problem: SliceProblem):
     return jnp.stack([flank, gear_edge, pinion_edge])
 
 
-def frozen(tree):
-    """`tree` with `jax.lax.stop_gradient` on its inexact arrays: for the parts of a solve
-    whose outputs carry no derivative (starting points, screening, the choice of
-    candidates), so that differentiating the TCA does not trace their tangents. The
-    solutions' derivatives come from the implicit adjoint at the root, which does not
-    depend on where Newton started."""
-    return jax.tree_util.tree_map(lambda x: jax.lax.stop_gradient(x) if eqx.is_inexact_array(x) else x, tree)
-
-
 def _solve(problem, solver, max_steps, y0, selector, relevant):
     """One candidate solve: its value, converged (successful and relevant), and failed
     (relevant, unsuccessful, last iterate on the active flanks: where the solve may have
@@ -213,7 +204,6 @@ def _solve(problem, solver, max_steps, y0, selector, relevant):
     pair = problem.pair
     dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
     one = jnp.ones_like(dom1[0])
-    y0 = jax.lax.stop_gradient(y0)
     options = dict(lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one]))
     sol = optx.root_find(
         _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
@@ -283,10 +273,13 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     contact proves that its solve missed an interior contact, `_missed_flank`: the TCA
     solves those again with `solve_again`)."""
     selectors = jnp.eye(3, dtype=problem.z.dtype)
-    fixed = frozen(problem)
+    # Starts, screening and the missed-flank check carry no derivative (the implicit
+    # adjoint gives the root's from the residual at the root, wherever Newton started), so
+    # they see stop_gradient'ed data and differentiating the TCA does not trace them.
+    fixed = jax.lax.stop_gradient(problem)
     values, converged, failed = jax.vmap(ft.partial(_solve, problem, solver, max_steps))(
         _starts(fixed), selectors, relevance(fixed))
-    missed = jnp.any(_missed_flank(fixed, frozen(values), converged))
+    missed = jnp.any(_missed_flank(fixed, jax.lax.stop_gradient(values), converged))
     return values, converged, failed.at[FLANK].set(failed[FLANK] | missed)
 
 
@@ -301,7 +294,7 @@ def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinde
     given; a flank candidate that missed its contact (`_missed_flank`) starts instead from
     the edge contact that proved it (plain Newton from there often runs past the tip too)
     and still fails unless this solve ends on the active flanks."""
-    fixed, values = frozen(problem), frozen(values)
+    fixed, values = jax.lax.stop_gradient((problem, values))  # as in `solve_candidates`
     missed = _missed_flank(fixed, values, converged) & (candidate == FLANK)
     start = jnp.where(jnp.any(missed), values[jnp.argmax(missed)], _starts(fixed)[candidate])
     value, ok, failed = _solve(problem, solver, max_steps, start, jnp.eye(3, dtype=problem.z.dtype)[candidate],
