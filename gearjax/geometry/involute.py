@@ -69,6 +69,11 @@ class InvoluteGearPair(AbstractInvolutePair):
         shape = jnp.broadcast_shapes(jnp.shape(u), jnp.shape(z))
         return jnp.broadcast_to(jnp.cos(self.base_helix_angle), shape)
 
+    @property
+    def contact_line_length(self) -> Scalar:
+        """$b/\\cos\\beta_b$ (mm): a contact line across the whole face."""
+        return self.face_width / jnp.cos(self.base_helix_angle)
+
     def lead_rotation(self, gear: int, z: ArrayLike) -> Scalar:
         """$\\psi_i(z) = \\pm z\\tan\\beta_b/r_{bi}$: right-hand pinion (left-hand gear) for
         `hand = +1`; both turn their sections in their own sense of rotation."""

@@ -22,6 +22,7 @@ from the pinion's tangency point $T_1$.
 
 from __future__ import annotations
 
+import abc
 import math
 from typing import ClassVar
 
@@ -242,6 +243,13 @@ class AbstractInvolutePair(AbstractFlankPair):
         """$\\varepsilon_\\alpha$ (-)."""
         s_a = self.tip_roll_length
         return (s_a[..., 0] + s_a[..., 1] - self.line_of_action_length) / self.transverse_base_pitch
+
+    @property
+    @abc.abstractmethod
+    def contact_line_length(self) -> Scalar:
+        """Length of a contact line across the whole face, $\\int_{-b/2}^{b/2}\\mathrm{d}z/|n_t|$
+        (mm): the length of line contact the LTCA's Hertz law refers the local load intensity
+        to (`gearjax.ltca.SliceCompliance`)."""
 
     @derived
     def overlap_ratio(self) -> Scalar:

@@ -57,7 +57,8 @@ SAINSOT_COEFFICIENTS = np.array(
     ]
 )
 
-#: Palmgren's line contact, steel: delta = PALMGREN * Q**0.9 / l**0.8 (mm, N).
+#: Palmgren's line contact, steel: delta = PALMGREN * Q**0.9 / L**0.8 (mm, N) for a load Q
+#: spread evenly over a contact line of length L.
 PALMGREN = 3.84e-5
 PALMGREN_EXPONENT = 0.9
 
