@@ -172,11 +172,11 @@ class SliceCompliance(AbstractCompliance):
             the normal module (default 1.1); 0 uncouples the slices.
         hertz: "palmgren" (nonlinear line contact, steel) or "linear" (Yang & Sun).
 
-    Palmgren's law $\delta = c_P Q^{0.9}/L^{0.8}$ ($c_P$ = 3.84e-5, mm and N) holds for a
-    load $Q$ spread evenly over a contact line of length $L$, i.e. $\delta = c_P w^{0.9}
+    Palmgren's law $\\delta = c_P Q^{0.9}/L^{0.8}$ ($c_P$ = 3.84e-5, mm and N) holds for a
+    load $Q$ spread evenly over a contact line of length $L$, i.e. $\\delta = c_P w^{0.9}
     L^{0.1}$ at the load intensity $w = Q/L$. Each slice applies it at its own intensity
     $w_i = F_i/l_i$ with $L$ the pair's contact line across the whole face
-    (`contact_line_length`, $b/\cos\beta_b$ for helical gears), so a uniform load gives
+    (`contact_line_length`, $b/\\cos\\beta_b$ for helical gears), so a uniform load gives
     Palmgren's approach whatever the number of slices: $a_i = c_PL^{0.1}/l_i^{0.9}$.
     (Taking $L = l_i$, the slice's own length, makes the approach of the same load fall as
     $l_i^{0.1}$: 7 % per doubling of the slices, without a limit.)
