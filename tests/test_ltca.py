@@ -156,7 +156,15 @@ def test_crowning_relieves_the_face_end_under_misalignment(seed_pair):
     end_plain = np.asarray(plain.loads)[..., 0].max()
     end_crowned = np.asarray(crowned.loads)[..., 0].max()
     assert end_plain > 2 * np.asarray(plain.loads)[..., -1].max()
-    assert end_crowned < 0.6 * end_plain
+    # 0.61 with Palmgren's law on the pair's contact line (0.6 was the bound before it)
+    assert end_crowned < 0.7 * end_plain
+    # and the load's centre moves back towards mid-face (-3.65 -> -3.34 mm)
+
+    def centre(ltca):
+        loads = np.asarray(ltca.loads)
+        return np.sum(loads * np.asarray(ltca.slice_z)) / np.sum(loads)
+
+    assert centre(plain) < centre(crowned) < 0.0
 
 
 def test_tip_relief_unloads_the_tip(spur_pair):
