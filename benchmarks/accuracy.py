@@ -178,6 +178,7 @@ def plot() -> None:
     from pathlib import Path
 
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -201,6 +202,7 @@ def plot() -> None:
         ax.axhline(0.05 if name == "strike_point_mm" else 0.01, color="grey", lw=0.8, ls="--")
         ax.set_title(name + (" (mm)" if name == "strike_point_mm" else " (relative)"), fontsize=9)
         ax.set_xlabel("run time of simulate (s)", fontsize=8)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # minor labels overlap
     axes.flat[0].legend(fontsize=7)
     fig.suptitle("Error against the 'reference' preset vs run time: presets (squares) and one knob changed "
                  "from 'default' (dots); dashed: the targets (1 %, 0.05 mm)", fontsize=10)
