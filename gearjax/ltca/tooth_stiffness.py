@@ -32,8 +32,9 @@ $\theta_f = \pi/z - w/r$, $w = \pi m_t/4 - h_{fP}\tan\alpha_t - \rho_{fP}(1-\sin
 $0.01 \le \theta_f \le 0.12$; small pinions ($z \lesssim 25$) extrapolate.
 
 **Contact**: linear, load-independent $1/k_h = 4(1-\nu^2)/(\pi E)$ per unit contact length
-(Yang & Sun 1985), or Palmgren's steel line contact $\delta = 3.84\cdot10^{-5}Q^{0.9}/l^{0.8}$
-(mm, N).
+(Yang & Sun 1985), or Palmgren's steel line contact $\delta = 3.84\cdot10^{-5}Q^{0.9}/L^{0.8}$
+(mm, N) for a load $Q$ over a contact line of length $L$ (how the slice model applies it:
+`gearjax.ltca.SliceCompliance`).
 
 The coefficient table and the verification of the integrals against direct integration
 along the tooth axis are recorded in the research notes of the LTCA issue; the test
