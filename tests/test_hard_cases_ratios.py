@@ -64,14 +64,15 @@ def random_failures(groups):
     return failed
 
 
-# Measured on these designs at the `fast` preset (2026-11-26), open in issue #12
+# Measured on these designs at the `fast` preset (2026-11-27), open in issue #12
 # (`tools/diagnostics/issue12/ratio_tca.py` lists the candidates):
 RANDOM_KNOWN = {
     "tca": "a TCA candidate solve fails on the active flank of a loaded slice, Newton and its damped "
-           "fallback both (a contact may be missed): 2 of 150 designs on 17/170 (68: the gear-tip "
-           "edge solve diverges at one slice; 143, m_n 1.0 mm: at 6 slices a real flank contact "
-           "at the start of the pinion's root relief, 0.05 mm inside the gear's tip (brute-force "
-           "scan), which Newton and the damped retry from the tip edge miss), 0 of 150 on 40/40",
+           "fallback both (a contact may be missed): 1 of 150 designs on 17/170 (143, m_n 1.0 mm: "
+           "4 flank solves at the start of the pinion's root relief, 0.05 mm inside the gear's tip, "
+           "which Newton and the damped retry from the tip edge miss; design 68's diverging gear-tip "
+           "edge solve is no failure since `edge_reachable`: that corner cannot reach the pinion's "
+           "active flank there), 0 of 150 on 40/40",
 }
 
 

@@ -177,7 +177,8 @@ class SliceCompliance(AbstractCompliance):
     L^{0.1}$ at the load intensity $w = Q/L$. Each slice applies it at its own intensity
     $w_i = F_i/l_i$ with $L$ the pair's contact line across the whole face
     (`contact_line_length`, $b/\\cos\\beta_b$ for helical gears), so a uniform load gives
-    Palmgren's approach whatever the number of slices: $a_i = c_PL^{0.1}/l_i^{0.9}$.
+    Palmgren's approach whatever the number of slices (exactly for helical gears, to the
+    midpoint rule's $\\sum_i l_i \\approx L$ for curvilinear ones): $a_i = c_PL^{0.1}/l_i^{0.9}$.
     (Taking $L = l_i$, the slice's own length, makes the approach of the same load fall as
     $l_i^{0.1}$: 7 % per doubling of the slices, without a limit.)
     """

@@ -252,6 +252,42 @@ def edge_is_first(problem: SliceProblem, values):
     return jax.vmap(first)(jnp.arange(3), values)
 
 
+#: Points at which `edge_reachable` samples an active flank's distance from the mate's axis.
+REACH_SAMPLES = 5
+
+
+def edge_reachable(problem: SliceProblem):
+    r"""Whether each edge candidate's tip corner can meet the mate's active flank (3,; True
+    for the flank row).
+
+    A tip corner turns with its gear, so at every gear offset it stays on one circle about
+    that gear's axis $O_2$; so does every point of the gear flank. The gear's tip corner
+    can touch the pinion's active flank only where that flank crosses the corner's circle,
+    and the pinion's tip corner (fixed for the slice) can touch the gear's active flank
+    only if its distance from $O_2$ lies among the radii of that flank. Both ranges are
+    sampled at `REACH_SAMPLES` points of the active flank, ends included (the radius of a
+    gear flank point grows with $u_2$; the pinion flank's distance from $O_2$ is monotone
+    along it on involute flanks near the mesh), and a corner outside its range by more than
+    `_parameter_tolerance` cannot touch: its failed solve misses no contact (issue #12:
+    17/170 random design 68, where the gear's tip circle misses the pinion's active flank at
+    one slice and the edge solve, with no root to find, diverged)."""
+    pair = problem.pair
+    (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)
+    o2 = pair.center(1)
+    zero = jnp.zeros_like(problem.pinion_rotation)
+    t = jnp.linspace(0.0, 1.0, REACH_SAMPLES, dtype=zero.dtype)
+    pinion_flank = jax.vmap(lambda f: safe_norm(problem.pinion_point(lo1 + f * (hi1 - lo1)) - o2))(t)
+    gear_flank = jax.vmap(lambda f: safe_norm(problem.gear_point(lo2 + f * (hi2 - lo2), zero) - o2))(t)
+    gear_corner = safe_norm(problem.gear_point(hi2, zero) - o2)
+    pinion_corner = safe_norm(problem.pinion_point(hi1) - o2)
+
+    def within(radius, radii):
+        tol = _parameter_tolerance(radius)  # radii are lengths in mm, like the parameters
+        return (radius >= jnp.min(radii) - tol) & (radius <= jnp.max(radii) + tol)
+
+    return jnp.stack([jnp.ones((), bool), within(gear_corner, pinion_flank), within(pinion_corner, gear_flank)])
+
+
 def _missed_flank(problem: SliceProblem, values, converged):
     """Edge candidates (3,) that `select_contact` would keep (valid, largest offset)
     although a flank contact inside the active flanks touches first (`edge_is_first`
@@ -269,9 +305,10 @@ def _missed_flank(problem: SliceProblem, values, converged):
 def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int):
     """Solve the three candidate problems of one slice: values (3, 3), converged (3,)
     (False for candidates screened out by `relevance`) and failed (3,) (relevant but not
-    converged, last iterate on the active flanks; and the flank candidate where an edge
-    contact proves that its solve missed an interior contact, `_missed_flank`: the TCA
-    solves those again with `solve_again`)."""
+    converged, last iterate on the active flanks, and for an edge of an involute family
+    its corner able to reach the mate's active flank, `edge_reachable`; and the flank
+    candidate where an edge contact proves that its solve missed an interior contact,
+    `_missed_flank`: the TCA solves those again with `solve_again`)."""
     selectors = jnp.eye(3, dtype=problem.z.dtype)
     # Starts, screening and the missed-flank check carry no derivative (the implicit
     # adjoint gives the root's from the residual at the root, wherever Newton started), so
@@ -280,6 +317,8 @@ def solve_candidates(problem: SliceProblem, solver: optx.AbstractRootFinder, max
     values, converged, failed = jax.vmap(ft.partial(_solve, problem, solver, max_steps))(
         _starts(fixed), selectors, relevance(fixed))
     missed = jnp.any(_missed_flank(fixed, jax.lax.stop_gradient(values), converged))
+    if problem.pair.conjugate_slices:
+        failed = failed & edge_reachable(fixed)
     return values, converged, failed.at[FLANK].set(failed[FLANK] | missed)
 
 
