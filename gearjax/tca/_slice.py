@@ -278,8 +278,8 @@ def edge_reachable(problem: SliceProblem):
     t = jnp.linspace(0.0, 1.0, REACH_SAMPLES, dtype=zero.dtype)
     pinion_flank = jax.vmap(lambda f: safe_norm(problem.pinion_point(lo1 + f * (hi1 - lo1)) - o2))(t)
     gear_flank = jax.vmap(lambda f: safe_norm(problem.gear_point(lo2 + f * (hi2 - lo2), zero) - o2))(t)
-    gear_corner = safe_norm(problem.gear_point(hi2, zero) - o2)
-    pinion_corner = safe_norm(problem.pinion_point(hi1) - o2)
+    # The corners are the flanks' last samples (f = 1: u = u_tip).
+    gear_corner, pinion_corner = gear_flank[-1], pinion_flank[-1]
 
     def within(radius, radii):
         tol = _parameter_tolerance(radius)  # radii are lengths in mm, like the parameters
