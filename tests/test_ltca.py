@@ -1,6 +1,7 @@
 """Loaded TCA: equilibrium, complementarity, closed forms, ISO stiffness, linearity, grads."""
 
 import math
+from pathlib import Path
 
 import equinox as eqx
 import jax
@@ -10,7 +11,8 @@ import pytest
 
 from gearjax import Accuracy, FlankDepth, FlankModification, Material, MeshErrors
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.ltca import ContactModel, IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis
+from gearjax.ltca import ContactModel, IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis, solver
+from gearjax.ltca.solver import ContactProblem, solve_contact
 from gearjax.tca import pair_window, tooth_contact_analysis
 
 ACC = Accuracy(positions_per_pitch=16, face_slices=21)
@@ -131,6 +133,28 @@ def test_palmgren_approach_converges_with_the_face_slices(seed_pair, loaded_seed
     mean_fine = float(np.mean(np.asarray(fine.transmission_error)))
     assert mean_coarse == pytest.approx(mean_fine, rel=5e-3)
     assert float(coarse.mean_mesh_stiffness) == pytest.approx(float(fine.mean_mesh_stiffness), rel=1e-2)
+
+
+def test_palmgren_newton_does_not_cycle(monkeypatch):
+    """The contact problem on which the active-set Newton iteration with Palmgren's law
+    cycled (seed pair, 1000 N·m, 81 slices, one position; `tests/data/palmgren_cycle.npz`,
+    written by `tools/diagnostics/issue12/ltca_cycle.py`): with the damped steps it
+    converges to a solution of the complementarity problem; with full Newton steps it does
+    not converge in 80 steps, so the data still exercise the damping."""
+    data = np.load(Path(__file__).parent / "data" / "palmgren_cycle.npz")
+    problem = ContactProblem(*(jnp.asarray(data[k]) for k in
+                               ("compliance", "nonlinear", "separation", "pinion_arm", "gear_arm", "torque")),
+                             float(data["exponent"]))
+    sol = solve_contact(problem, rtol=1e-10, atol=1e-10, max_steps=80)
+    assert bool(sol.converged) and int(sol.steps) < 20
+    loads, gaps = np.asarray(sol.loads), np.asarray(sol.gaps)
+    scale = loads.max()
+    assert loads.min() >= -1e-9 * scale
+    loaded = loads > 1e-9 * scale
+    assert np.all(np.abs(gaps[loaded]) < 1e-9) and np.all(gaps[~loaded] > -1e-9)
+    assert float(np.sum(np.asarray(problem.pinion_arm) * loads)) == pytest.approx(float(problem.torque), rel=1e-10)
+    monkeypatch.setattr(solver, "_fraction_to_boundary", lambda loads, new: jnp.ones((), loads.dtype))
+    assert not bool(solve_contact(problem, rtol=1e-10, atol=1e-10, max_steps=80).converged)
 
 
 def test_linear_compliance_is_linear_in_the_load(seed_pair):

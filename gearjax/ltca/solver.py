@@ -64,6 +64,10 @@ from ..accuracy import floored_tolerances
 #: separations of points without a contact are replaced by this (mm): they take no load
 NO_CONTACT = 1.0
 
+#: a damped Newton step of a nonlinear contact law keeps at least this fraction of each
+#: loaded point's load (`_fraction_to_boundary`)
+KEEP = 0.1
+
 
 class ContactProblem(eqx.Module):
     """Data of one position's contact problem (see the module docstring). Axes: tooth pair
@@ -193,6 +197,26 @@ def _active_set(problem: ContactProblem, loads, rotation, stiffness):
     return (score > 0) | (score == jnp.max(score))
 
 
+def _fraction_to_boundary(loads, new_loads):
+    """Step length $\\lambda \\in (0, 1]$ that lets no loaded point lose more than
+    `1 - KEEP` of its load: $\\lambda = \\min_i (1 - \\theta)F_i/(F_i - F_i^N)$ over the points
+    with $F_i > 0$ and Newton load $F_i^N < \\theta F_i$, $\\theta$ = `KEEP` (the
+    fraction-to-the-boundary rule of interior-point methods; Nocedal & Wright, Numerical
+    Optimization, 2nd ed., 2006).
+
+    Palmgren's law $aF^{0.9}$ is concave, so a full Newton step from above a point's root
+    overshoots, possibly below zero, where the smoothed law is flat: from there the next
+    step returns to the same point above the root, and the iteration cycles with the active
+    set fixed (issue #12: seed 001's pair at 81 slices, 1000 N·m, one position; the loads of
+    one point alternated between 48.3 and -1.26 N). The damped steps keep the loads
+    positive, where the law's linearisation is not flat. Used
+    only for steps that keep the active set: a step that changes it is taken in full, so a
+    point leaving contact is dropped at once."""
+    cut = (loads > 0) & (new_loads < KEEP * loads)
+    ratio = (1.0 - KEEP) * loads / jnp.where(cut, loads - new_loads, 1.0)
+    return jnp.min(jnp.where(cut, ratio, 1.0))
+
+
 @eqx.filter_custom_jvp
 def _implicit(problem: ContactProblem, loads, rotation, active):
     """Identity in value on the converged `(loads, rotation)`; derivatives by the implicit
@@ -254,6 +278,9 @@ def solve_contact(problem: ContactProblem, *, rtol: float, atol: float, max_step
         new_active = _active_set(frozen, new_loads, new_rotation, stiffness)
         settled = jnp.all(new_active == active)
         if problem.exponent != 1.0:
+            damping = jnp.where(settled, _fraction_to_boundary(loads, new_loads), 1.0)
+            new_loads = loads + damping * (new_loads - loads)
+            new_rotation = rotation + damping * (new_rotation - rotation)
             scale = jnp.max(jnp.abs(new_loads))
             settled = settled & (jnp.max(jnp.abs(new_loads - loads)) <= rtol * scale + atol * (1.0 + scale))
         return new_loads, new_rotation, new_active, settled, i + 1
