@@ -101,7 +101,7 @@ def test_energy_balance_and_power_law(seed_pair):
     assert float(imp.stiffness.fit_error) < 0.1
 
 
-@pytest.mark.parametrize("linear", [0.0, 2e-6])
+@pytest.mark.parametrize("linear", [0.0, 1e-6])
 def test_local_stiffness_fit_against_a_closed_form_curve(linear):
     """One contact point with compliance c and Palmgren's contact approach a F^0.9: the
     force-approach curve is delta = c F + a F^0.9 in closed form; for c = 0 it is the power
@@ -124,7 +124,9 @@ def test_local_stiffness_fit_against_a_closed_form_curve(linear):
         assert float(fit.fit_error) < 1e-8
     else:
         assert float(fit.fit_error) == pytest.approx(worst, rel=1e-4)
-        assert float(fit.fit_error) > 1e-3  # the linear term bends the curve
+        # the linear term (as large as the Hertz term at the top load) bends the curve:
+        # by 9e-4 over the default range's decade of forces
+        assert float(fit.fit_error) > 5e-4
 
 
 def _turn(point, center, angle):
