@@ -3,11 +3,12 @@
 `Accuracy` is hashable configuration (every field static): changing it recompiles, which
 is what makes the compiled program contain exactly the resolution asked for. The presets'
 errors against `reference` and their cost in time are measured by `benchmarks/accuracy.py`
-(README, "What accuracy costs"): at 1.8-2.0 % of the reference's time `default` is within
+(README, "What accuracy costs"): at 1.9-3.4 % of the reference's time `default` is within
 0.7 % of it on every quantity of an unmodified spur and a curvilinear pair, and on the seed
 001 pair's mean LTE, mesh stiffness and load share (0.03-0.2 %), but not on its LTE
-peak-to-peak (8 %), maximum pressure (2 %) and impact force (7.5 %); the face slices limit
-those.
+peak-to-peak (8 %; limited by the face slices), maximum pressure (2 %; a face-end peak that
+grows as the slices narrow) and impact force (1.6 %; the strike velocity's slice
+dependence).
 """
 
 from __future__ import annotations
