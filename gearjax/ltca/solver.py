@@ -209,9 +209,9 @@ def _fraction_to_boundary(loads, new_loads):
     step returns to the same point above the root, and the iteration cycles with the active
     set fixed (issue #12: seed 001's pair at 81 slices, 1000 N·m, one position; the loads of
     one point alternated between 48.3 and -1.26 N). The damped steps keep the loads
-    positive, where the law's linearisation is not flat. Used
-    only for steps that keep the active set: a step that changes it is taken in full, so a
-    point leaving contact is dropped at once."""
+    positive, where the law's linearisation is not flat. Used only for steps that keep the
+    active set: a step that changes it is taken in full, so a point leaving contact is
+    dropped at once."""
     cut = (loads > 0) & (new_loads < KEEP * loads)
     ratio = (1.0 - KEEP) * loads / jnp.where(cut, loads - new_loads, 1.0)
     return jnp.min(jnp.where(cut, ratio, 1.0))
