@@ -64,16 +64,11 @@ def random_failures(groups):
     return failed
 
 
-# Measured on these designs at the `fast` preset (2026-11-27), open in issue #12
-# (`tools/diagnostics/issue12/ratio_tca.py` lists the candidates):
-RANDOM_KNOWN = {
-    "tca": "a TCA candidate solve fails on the active flank of a loaded slice, Newton and its damped "
-           "fallback both (a contact may be missed): 1 of 150 designs on 17/170 (143, m_n 1.0 mm: "
-           "4 flank solves at the start of the pinion's root relief, 0.05 mm inside the gear's tip, "
-           "which Newton and the damped retry from the tip edge miss; design 68's diverging gear-tip "
-           "edge solve is no failure since `edge_reachable`: that corner cannot reach the pinion's "
-           "active flank there), 0 of 150 on 40/40",
-}
+# No known failures. Until 2026-11-27 one of 150 designs on 17/170 failed (143, m_n 1.0 mm):
+# 4 flank solves whose contact lies 1 µm inside the end of the pinion's root relief, where
+# the flank's curvature jumps; the damped fallback needs 40-71 steps there and had 32 at
+# `fast` (`tools/diagnostics/issue12/relief_kink.py`; `tca.analysis.fallback_steps`).
+RANDOM_KNOWN: dict[str, str] = {}
 
 
 @pytest.mark.parametrize("kind", failure_kinds(RANDOM_KNOWN, ("non-finite", "tca", "ltca")))

@@ -9,6 +9,7 @@ import gearjax as gj
 from _cases import random_involute, scene, missed_contacts, forward
 from gearjax.tca._slice import make_problem, solve_candidates, solve_again, relevance, edge_is_first
 from gearjax.tca.grid import face_slices, positions
+from gearjax.tca.analysis import fallback_steps
 from gearjax._newton import SafeguardedNewton
 import test_hard_cases_ratios as R
 
@@ -36,5 +37,5 @@ for i in bad:
               f"failed {np.asarray(failed)} edge first {np.asarray(edge_is_first(prob, vals))}")
         print("    values", np.asarray(vals).round(5).tolist())
         for kind in np.flatnonzero(np.asarray(failed)):
-            again = solve_again(prob, int(kind), SafeguardedNewton(rtol=rtol, atol=atol), 4 * acc.newton_max_steps, True, vals, conv)
+            again = solve_again(prob, int(kind), SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(acc.newton_max_steps), True, vals, conv)
             print(f"    retry {kind}", np.asarray(again[0]).round(5).tolist(), bool(again[1]), bool(again[2]))
