@@ -37,17 +37,17 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
-#: Approximate cost (s) of each test file in one whole run on 2 cores (2026-11-26,
+#: Approximate cost (s) of each test file in one whole run on 2 cores (2026-11-27,
 #: `GEARJAX_TEST_PROFILE` and `tools/test_profile.py`; the machine also ran a 4-minute test
-#: beside the first files). Only the schedule uses them; in that run the two workers were
-#: busy 2 065 and 2 067 s, 77 % of it tracing and compiling in their own processes
+#: and two diagnostics beside it). Only the schedule uses them; in that run the two workers
+#: were busy 1 940 and 1 938 s, 75 % of it tracing and compiling in their own processes
 #: (notebook kernels and command-line subprocesses not counted).
 FILE_COSTS = {
-    "test_optimize.py": 683, "test_sweep.py": 491, "test_notebooks.py": 465, "test_impact.py": 378,
-    "test_ltca.py": 282, "test_results.py": 248, "test_hard_cases.py": 247,
-    "test_hard_cases_double_arc.py": 198, "test_hard_cases_curvilinear.py": 197, "test_tca.py": 181,
-    "test_transforms.py": 156, "test_hard_cases_ratios.py": 137, "test_cli.py": 129, "test_curvilinear.py": 111,
-    "test_scene.py": 101, "test_cache.py": 54, "test_double_arc.py": 30, "test_resources.py": 23,
+    "test_optimize.py": 822, "test_sweep.py": 455, "test_impact.py": 395, "test_notebooks.py": 390,
+    "test_ltca.py": 295, "test_hard_cases.py": 216, "test_results.py": 178, "test_hard_cases_double_arc.py": 176,
+    "test_hard_cases_curvilinear.py": 170, "test_tca.py": 135, "test_hard_cases_ratios.py": 123,
+    "test_transforms.py": 107, "test_cli.py": 106, "test_curvilinear.py": 96, "test_scene.py": 90,
+    "test_cache.py": 46, "test_double_arc.py": 27, "test_resources.py": 23,
 }
 
 

@@ -112,6 +112,37 @@ def _contact_residual(y, args):
     return jnp.where(relevant, jnp.concatenate([x1 - x2, third[None]]), y - start)
 
 
+#: Rounding floor of the coincidence residual $X_1 - X_2$, in units in the last place of
+#: the centre distance (`_coincidence_weight`).
+COINCIDENCE_ULPS = 4
+
+
+def _coincidence_weight(pair: AbstractFlankPair, atol):
+    """Weights (3,) of the residual's rows for a solve with absolute tolerance `atol`: the
+    coincidence rows (mm) are scaled by $\\text{atol}/\\max(\\text{atol}, 4\\varepsilon a)$
+    ($a$ the centre distance, $\\varepsilon$ the dtype's machine epsilon), the parallel row
+    keeps 1.
+
+    The points $X_1$, $X_2$ are computed from coordinates as large as the centre distance,
+    so their difference cannot fall below a few units in the last place of $a$. In float64
+    that floor (6e-14 mm per ulp at $a$ = 282 mm) lies below the presets' tolerances and the
+    weights are exactly 1 (`reference`, 1e-13, is reached from $a$ = 113 mm, where the
+    weight becomes 0.4 at 282 mm); in float32 the floored atol (`floored_tolerances`, 7.6e-6)
+    is one ulp of a 64-128 mm coordinate, which converged solves of the seed pair missed by
+    one to six ulps (`tools/diagnostics/issue12/float32.py`), and their contacts were
+    dropped. Scaling a row changes neither the root nor its implicit derivative."""
+    eps = float(jnp.finfo(jnp.result_type(pair.center_distance)).eps)
+    floor = COINCIDENCE_ULPS * eps * jnp.abs(pair.center_distance)
+    coincidence = atol / jnp.maximum(atol, floor)
+    return jnp.stack([coincidence, coincidence, jnp.ones_like(coincidence)])
+
+
+def _weighted_residual(y, args):
+    """`_contact_residual` with its rows scaled (`_coincidence_weight`)."""
+    weight, inner = args
+    return weight * _contact_residual(y, inner)
+
+
 class SliceContact(eqx.Module):
     """The first contact of one slice (arrays broadcast over any batch axes).
 
@@ -205,8 +236,9 @@ def _solve(problem, solver, max_steps, y0, selector, relevant):
     dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
     one = jnp.ones_like(dom1[0])
     options = dict(lower=jnp.stack([dom1[0], dom2[0], -one]), upper=jnp.stack([dom1[1], dom2[1], one]))
+    weight = _coincidence_weight(pair, solver.atol)
     sol = optx.root_find(
-        _contact_residual, solver, y0, args=(problem, selector, y0, relevant), options=options,
+        _weighted_residual, solver, y0, args=(weight, (problem, selector, y0, relevant)), options=options,
         max_steps=max_steps, throw=False, adjoint=ADJOINT,
     )
     success = sol.result == optx.RESULTS.successful
