@@ -136,22 +136,27 @@ def main() -> None:
     parser.add_argument("--settings", default=",".join(SETTINGS))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--plot", action="store_true", help="only draw the figure from the results file")
-    parser.add_argument("--resume-from", help="keep the rows of the other cases from this results file")
+    parser.add_argument("--resume-from", help="keep the other rows (cases, or settings of a case, not rerun) from "
+                        "this results file; a case's reference is always rerun")
     args = parser.parse_args()
     if args.plot:
         return plot()
     table = cases()
     rows = []
+    settings = args.settings.split(",")
     if args.resume_from:
         import json
         from pathlib import Path
 
-        rows = [r for r in json.loads(Path(args.resume_from).read_text())["rows"] if r["case"] not in args.cases.split(",")]
+        # the rerun rows are measured against a new reference run, which replaces the old one
+        settings = ["reference"] + [name for name in settings if name != "reference"]
+        rerun = {(case, name) for case in args.cases.split(",") for name in settings}
+        rows = [r for r in json.loads(Path(args.resume_from).read_text())["rows"] if (r["case"], r["setting"]) not in rerun]
     for case in args.cases.split(","):
         loads = table[case]
         reference, ref_compile, ref_run = measure(loads, SETTINGS["reference"], args.repeats)
         print(f"{case}: reference compile {ref_compile:.1f} s, run {ref_run * 1e3:.1f} ms", flush=True)
-        for name in args.settings.split(","):
+        for name in settings:
             if name == "reference":
                 values, compile_s, run_s = reference, ref_compile, ref_run
             else:
