@@ -1,28 +1,26 @@
-# Set-up on a fresh machine needs only Python (python3 on PATH): >= 3.10 for the library and
-# `make demo`, >= 3.11 for `make test` (its pinned tools need it).
-PYTHON ?= python3
+# Set-up on a fresh machine needs only Python. The environment is made from the newest
+# Python >= 3.12 found (on PATH, then pyenv's installed versions), which gets a current JAX;
+# with only an older one (>= 3.10 for the library and `make demo`, >= 3.11 for `make test`)
+# it gets jax 0.10.2 and says what that costs. `make PYTHON=/path/to/python ...` picks one.
+PYTHON ?=
 VENV   := .venv
 BIN    := $(VENV)/bin
 
 .PHONY: demo test bench clean
 
-$(BIN)/python:
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-
 # Creates the environment, installs gearjax and runs the built-in default scene.
-demo: $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[plot]"
+demo:
+	sh tools/setup_env.sh $(VENV) plot $(PYTHON)
 	$(BIN)/gearjax run
 
 # Installs the test dependencies and runs the whole suite (notebooks included).
-test: $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[dev,plot]"
+test:
+	sh tools/setup_env.sh $(VENV) dev,plot $(PYTHON)
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
 # Benchmarks are not tests: they time things and write benchmarks/results/*.json.
-bench: $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[plot]"
+bench:
+	sh tools/setup_env.sh $(VENV) plot $(PYTHON)
 	$(BIN)/python benchmarks/tca.py
 
 clean:

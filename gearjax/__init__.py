@@ -3,20 +3,15 @@
 Pipeline: Scene -> geometry -> tca (rigid) -> ltca (elastic) -> impact -> results. Every
 stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-compiled,
 `vmap`-batched and differentiated. gearjax changes no JAX configuration; float64, the
-reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. On
-import it sets, unless already set, `PJRT_NPROC=1` (with jaxlib 0.10.0-0.11.0) and one XLA
-CPU flag in `XLA_FLAGS`, against a deadlock of jaxlib's CPU LAPACK kernels, and (with
-jaxlib 0.10.x) a second XLA flag that compiles its programs 14-47 % faster; see
+reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. With
+jaxlib >= 0.12 importing it changes nothing in the process; older jaxlib versions get
+their workarounds (environment variables read when JAX's CPU backend starts), see
 `gearjax._runtime`.
 """
 
-from ._runtime import configure_compiler as _configure_compiler
-from ._runtime import configure_thread_pool as _configure_thread_pool
-from ._runtime import configure_xla_flags as _configure_xla_flags
+from ._runtime import configure as _configure_runtime
 
-_configure_thread_pool()
-_configure_xla_flags()
-_configure_compiler()
+_configure_runtime()
 
 from . import units as units
 from ._solution import (

@@ -27,26 +27,16 @@ entries are keyed by the program, the JAX version and the backend, so a new JAX 
 a stale program; delete the directory to reclaim space. Both caches load what they find
 there, so the directory must be writable only by its user.
 
-**Reverse-mode gradients of the impact force stay out of JAX's cache** (jaxlib 0.10.2): such
-an executable (e.g. the optimiser's batched value and gradient of the seed 001 objective at
-`fast`) can be written to the cache, but loading it in a later process crashes that process
-with a segmentation fault: LLVM's JIT linker, linking the deserialized object files, recurses
-about 1 000 levels deep (8 000 stack frames) in one of XLA's thread-pool threads and
-overflows its stack; neither a larger `ulimit -s` nor `--xla_cpu_parallel_codegen_split_count=1`
-avoids it. Forward programs (`simulate`, the sweeps, the GA's batch) load fine. gearjax's own
-gradient program (`gearjax.optimize`: gradient descent and `sensitivities` share it) calls
-`exclude_from_persistent_cache`, so it is compiled in every process and never loaded, and
-`gearjax optimize` uses the cache for everything else; `python tools/check_cache_gradient_load.py`
-runs it in two fresh processes with one cache and shows both exit normally. A gradient
-program of your own (`jax.grad` of `simulate`'s impact force) is written like any other:
-call `exclude_from_persistent_cache()` inside it, or keep such a process off the cache.
-
-On a 2-core CPU shared with other jobs (load 4-7; rough), a warm `gearjax run` of the
-default scene took 8-16 s instead of 31-57 s without the program cache; what remains is
-mostly loading the compiled executable from JAX's cache (2-7 s: the default scene's
-executable is 22 MB), importing JAX/equinox/optimistix (about 2.5 s), building and
-checking the scene (about 2 s of small eager programs) and lowering the loaded program's
-call (about 1.5 s).
+**Reverse-mode gradients of the impact force and old jaxlib versions**: with jaxlib 0.10.2
+such an executable (e.g. the optimiser's value and gradient of the seed 001 objective) is
+written to the cache, but loading it in a later process crashes that process (a stack
+overflow in LLVM's JIT linker). Where the installed jaxlib is not known to load them safely
+(`gearjax._runtime.gradient_cache_safe`: jaxlib < 0.12), gearjax's own gradient program
+(`gearjax.optimize`: gradient descent and `sensitivities` share it) keeps itself out of the
+cache with `exclude_from_persistent_cache`; with a current jaxlib it is cached like every
+other program, and a later process loads it instead of compiling it.
+`python tools/check_cache_gradient_load.py [--raw]` runs it in two fresh processes with
+one cache.
 """
 
 from __future__ import annotations
@@ -121,15 +111,18 @@ def _do_nothing() -> None:
 
 def exclude_from_persistent_cache() -> None:
     """Inside a function being traced for `jit`: keep its compiled program out of JAX's
-    persistent compilation cache (it is compiled again in every process, never loaded).
+    persistent compilation cache where the installed jaxlib may crash on loading it back
+    (`gearjax._runtime.gradient_cache_safe`; call it in a gradient program of your own
+    through the impact force). With a jaxlib that loads such programs it does nothing.
 
     It adds a host callback that does nothing (`jax.debug.callback`, an effect, so it is
-    never removed): JAX does not write an executable that has host callbacks. For programs
-    whose cached executable cannot be loaded back (reverse-mode gradients of the impact
-    force with jaxlib 0.10.2, see this module's documentation). The callback costs one call
-    into Python per execution of the program (microseconds).
+    never removed): jax < 0.12 does not write an executable that has host callbacks. The
+    callback costs one call into Python per execution of the program (microseconds).
     """
-    jax.debug.callback(_do_nothing)
+    from ._runtime import gradient_cache_safe
+
+    if not gradient_cache_safe():
+        jax.debug.callback(_do_nothing)
 
 
 def _cache_started() -> bool:

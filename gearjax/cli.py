@@ -56,8 +56,8 @@ def _caches(args: argparse.Namespace):
     from .cache import _cache_started, enable_compilation_cache
     from .program_cache import program_cache
 
-    # `optimize`'s gradient program keeps itself out of JAX's cache (`gearjax.cache`: with
-    # jaxlib 0.10.2 it could not be loaded back); its GA batch and `simulate` are cached
+    # every program is cached; with jaxlib < 0.12 `optimize`'s gradient program keeps itself
+    # out (`gearjax.cache`: it could not be loaded back)
     if args.no_cache:
         # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);
         # JAX decides at the process's first compilation, so a started cache stays
@@ -101,8 +101,11 @@ def _run(args: argparse.Namespace) -> int:
     from .resources import MemoryEstimateError
 
     # The summary reports every stage's result code, so a failed stage is shown, not raised.
+    from .progress import compiling
+
     try:
-        result = simulate(scene, throw=False)
+        with compiling(f"the {_program_kind(scene)} program for this scene structure"):
+            result = simulate(scene, throw=False)
     except MemoryEstimateError as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
@@ -112,6 +115,13 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(summary(out))
     return 0
+
+
+def _program_kind(scene) -> str:
+    """The last stage of a scene's program, in words."""
+    if "impact" in scene.effects:
+        return "mesh-in impact"
+    return "loaded contact" if "ltca" in scene.effects else "tooth contact"
 
 
 def _reproduce(args: argparse.Namespace) -> int:
@@ -152,8 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         "--cross-check", action="store_true",
         help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
     )
-    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section); "
-                                          "its gradient program is compiled in every run (kept out of the persistent cache, see gearjax.cache)")
+    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section)")
     opt.add_argument("scene", nargs="?", help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
     opt.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
     opt.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")

@@ -30,7 +30,7 @@ import jax
 import numpy as np
 
 from ._validate import check_int
-from .progress import Progress
+from .progress import Progress, compiling
 from .rundir import RunDirectory, atomic_write
 from .scene import Scene
 
@@ -102,7 +102,10 @@ def run_impact_sweep(
         for k in range(len(records), chunks):
             part = torques_Nm[k * length:(k + 1) * length]
             padded = np.concatenate([part, np.repeat(part[-1:], length - part.shape[0])])
-            sweep = impact_sweep(scene, torques_Nm=padded, speeds_rpm=speeds_rpm, throw=False)
+            first = k == len(records)  # the chunk that compiles the sweep's program
+            with compiling("the impact sweep's program for this scene structure and chunk",
+                           mode=progress if first else None):
+                sweep = impact_sweep(scene, torques_Nm=padded, speeds_rpm=speeds_rpm, throw=False)
             rows = {key: value[: part.shape[0]] for key, value in sweep_rows(sweep).items() if key not in _PER_RUN}
             elapsed = previous + time.perf_counter() - start
             record = {"step": k + 1, "rows": rows, "elapsed_s": elapsed}

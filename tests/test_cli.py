@@ -192,8 +192,7 @@ def test_reproduce_dca_json(capsys):
 
 def test_commands_use_the_persistent_cache_unless_told_not_to(tmp_path):
     """In a fresh process (where JAX has not yet decided on its cache), `optimize` and `run`
-    turn JAX's persistent compilation cache on for their run (the optimiser's gradient
-    program keeps itself out of it, `gearjax.cache`), `--no-cache` turns it off; and each
+    turn JAX's persistent compilation cache on for their run, `--no-cache` turns it off; and each
     command leaves the setting as it found it."""
     import os
     import subprocess

@@ -1,18 +1,18 @@
-"""The crash that keeps reverse-mode impact gradients out of JAX's persistent compilation
-cache (`gearjax.cache`), and gearjax's way around it.
+"""The optimiser's gradient program and JAX's persistent compilation cache (`gearjax.cache`).
 
 Two fresh processes compute the optimiser's batched value and gradient of the seed 001
 objective (`fast`, 2 designs) with one new cache directory.
 
-    python tools/check_cache_gradient_load.py         # gearjax's program: about 8 min on 2 cores
-    python tools/check_cache_gradient_load.py --raw   # the same gradient without the exclusion
+    python tools/check_cache_gradient_load.py         # gearjax's program: several minutes on 2 cores
+    python tools/check_cache_gradient_load.py --raw   # the same gradient, never excluded from the cache
 
-With `--raw` the first process compiles and writes the executable and the second loads it
-and, with jaxlib 0.10.2, dies of a segmentation fault (exit status -11: a stack overflow
-in LLVM's JIT linker). gearjax's own program (`_batch_gradients`) calls
-`gearjax.cache.exclude_from_persistent_cache`: no entry of it is written, both processes
-compile it and exit 0. Prints each process's exit status, its result and the cache
-entries of the gradient program after it.
+With a current jaxlib (>= 0.12) the first process writes the program and the second loads
+it and prints the same value and gradient. With jaxlib 0.10.2, `--raw` shows why gearjax keeps
+it out of the cache there: the second process dies of a segmentation fault (exit status
+-11, a stack overflow in LLVM's JIT linker), while gearjax's own program
+(`exclude_from_persistent_cache`) writes no entry, so both processes compile it and exit 0.
+Prints each process's exit status, its result and the cache entries of the gradient
+program after it.
 """
 
 import argparse
@@ -39,7 +39,7 @@ objective = go.Objective.create(scene)
 space = go.DesignSpace.for_scene(scene, tip_relief_length=(0.5, 4.5))
 units = np.asarray(space.to_unit(np.stack([np.asarray(paper_optimum().as_vector())] * 2)))
 if sys.argv[2] == "raw":
-    @eqx.filter_jit
+    @eqx.filter_jit  # a gradient program of the same objective, never excluded
     def raw_gradient(objective, space, units):
         return jax.lax.map(jax.value_and_grad(lambda x: objective(space.to_design(x))), units)
     value, grad = raw_gradient(objective, space, units)

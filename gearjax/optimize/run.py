@@ -32,7 +32,7 @@ import numpy as np
 from .._custom_types import ArrayLike
 from .._validate import check_int
 from ..cache import exclude_from_persistent_cache
-from ..progress import Progress
+from ..progress import Progress, compiling
 from ..rundir import RunDirectory
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
@@ -94,7 +94,8 @@ def _batch_gradients(objective: Objective, designs):
 
     Gradient descent and `sensitivities` share it: reverse mode costs about the same for
     the four arguments as for the design alone, and one program compiles once (minutes).
-    It is kept out of JAX's persistent cache (`gearjax.cache.exclude_from_persistent_cache`).
+    With jaxlib < 0.12 it is kept out of JAX's persistent cache
+    (`gearjax.cache.exclude_from_persistent_cache`).
     """
     dtype = objective.torques.dtype
     speed = jnp.asarray(objective.scene.operating.speed, dtype)
@@ -192,7 +193,10 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
             state, records = loaded
     previous_time = records[-1]["elapsed_s"] if records else 0.0
     initial_design = np.asarray(objective.scene.modification.as_vector())
-    initial = records[0]["initial_objective"] if records else _initial_objective(method, objective, space, initial_design, batch)
+    program = "the GA's batch program" if method == "ga" else "the value-and-gradient program"
+    with compiling(f"{program} for this objective", mode=progress):  # the run's one big compilation
+        initial = (records[0]["initial_objective"] if records
+                   else _initial_objective(method, objective, space, initial_design, batch))
     samples = int(objective.torques.shape[0]) * objective.samples
     bar = Progress(progress, steps, len(records), "generation" if method == "ga" else "iteration")
     try:
