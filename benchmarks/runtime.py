@@ -1,6 +1,6 @@
 """What the installed JAX costs and gives: the public calls a user makes, compile and run apart.
 
-    python benchmarks/runtime.py [--repeats 5] [--no-cli] [--name NAME]
+    python benchmarks/runtime.py [--repeats 5] [--rows te_batched ltca_iso ltca_slice cli] [--name NAME]
 
 Run it under each interpreter to compare JAX versions back to back (`make` builds `.venv`
 from the newest Python >= 3.12; a Python 3.11 venv gets jax 0.10.2). Rows:
@@ -95,18 +95,23 @@ def cli_rows(warm_repeats=3):
     return {"cli_cold_s": times[0], "cli_warm_s": statistics.median(times[1:]), "cli_warm_runs_s": times[1:]}
 
 
+ROWS = {
+    "te_batched": te_batched,
+    "ltca_iso": lambda repeats: load_sweep_row(gj.IsoCompliance(), 64, np.linspace(1e5, 2e6, 64), repeats),
+    "ltca_slice": lambda repeats: load_sweep_row(gj.SliceCompliance(), 41, np.asarray([1e6]), repeats),
+    "cli": lambda repeats: cli_rows(),
+}
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--no-cli", action="store_true", help="skip the gearjax run processes")
+    parser.add_argument("--rows", nargs="+", default=list(ROWS), choices=list(ROWS), help="rows to run (default all)")
     parser.add_argument("--name", default=None)
     args = parser.parse_args(argv)
     out = {"machine": {**machine(), "python": sys.version.split()[0]}, "rows": {}}
-    out["rows"]["te_batched"] = te_batched(args.repeats)
-    out["rows"]["ltca_iso"] = load_sweep_row(gj.IsoCompliance(), 64, np.linspace(1e5, 2e6, 64), args.repeats)
-    out["rows"]["ltca_slice"] = load_sweep_row(gj.SliceCompliance(), 41, np.asarray([1e6]), args.repeats)
-    if not args.no_cli:
-        out["rows"]["cli"] = cli_rows()
+    for row in args.rows:
+        out["rows"][row] = ROWS[row](args.repeats)
     for key, row in out["rows"].items():
         print(key, {k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items() if not k.endswith("runs_s")})
     path = write(args.name or f"runtime_jax{jax.__version__}", out)
