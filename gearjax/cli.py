@@ -56,7 +56,7 @@ def _caches(args: argparse.Namespace):
     from .cache import _cache_started, enable_compilation_cache
     from .program_cache import program_cache
 
-    # every program is cached; with jaxlib < 0.12 `optimize`'s gradient program keeps itself
+    # programs are cached; with jaxlib < 0.12 `optimize`'s gradient program keeps itself
     # out (`gearjax.cache`: it could not be loaded back)
     if args.no_cache:
         # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);

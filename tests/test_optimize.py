@@ -157,8 +157,7 @@ def test_ga_is_reproducible_and_a_killed_run_resumes_to_the_same_result(ga_run, 
             saved(self, state, record)
 
         run_module.RunDirectory.save = save
-        pair = gj.InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0)  # as conftest's seed_pair: the same program
-    scene = gj.Scene(pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+        scene = gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
                          effects=("impact",), accuracy="fast")
         objective = go.Objective.create(scene)
         space = go.DesignSpace.for_scene(scene, tip_relief_length=(0.5, 4.5))

@@ -22,7 +22,7 @@ import tempfile
 from pathlib import Path
 
 CHILD = """
-import sys
+import logging, sys, time
 import equinox as eqx
 import jax
 jax.config.update("jax_enable_x64", True)
@@ -33,6 +33,12 @@ from gearjax.optimize.run import _batch_value_and_grad
 from gearjax.papers.seed001 import paper_optimum, seed_pair
 
 gj.enable_compilation_cache(sys.argv[1], programs=False)
+messages = []
+handler = logging.Handler()
+handler.emit = lambda record: messages.append(record.getMessage())
+logging.getLogger("jax._src.compiler").addHandler(handler)
+logging.getLogger("jax._src.compiler").setLevel(logging.DEBUG)
+start = time.perf_counter()
 scene = gj.Scene(seed_pair(), paper_optimum(), operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
                  effects=("impact",), accuracy="fast")
 objective = go.Objective.create(scene)
@@ -45,7 +51,10 @@ if sys.argv[2] == "raw":
     value, grad = raw_gradient(objective, space, units)
 else:
     value, grad = _batch_value_and_grad(objective, space, units)
-print("F_s", np.asarray(value), "dF/dx1", np.asarray(grad)[:, 0])
+print("F_s", np.asarray(value), "dF/dx1", np.asarray(grad)[:, 0], f"({time.perf_counter() - start:.0f} s)")
+for m in messages:
+    if "gradient" in m and ("cache hit" in m or "CACHE MISS" in m):
+        print("  ", m[:110])
 """
 
 
@@ -59,6 +68,9 @@ def main() -> int:
             entries = sorted(p.name for p in Path(directory).iterdir() if "grad" in p.name)
             print(f"{run} process ({mode}): exit status {proc.returncode}; gradient entries in the cache: {entries}")
             print(proc.stdout.strip())
+            for line in proc.stderr.splitlines():
+                if "compilation cache" in line or "Segmentation" in line:
+                    print("  stderr:", line[:300])
     return 0
 
 
