@@ -4,7 +4,7 @@ r"""Newton's method with a backtracking safeguard: an optimistix root finder.
 of a parabolic relief has a continuous tangent but a curvature that jumps where the relief
 starts), full steps can cycle between two iterates on either side of the jump and never
 converge: seen in the TCA's flank-contact solves of random designs with short, deep
-reliefs (issue #12). The TCA solves every candidate with `optimistix.Newton` and the few
+reliefs. The TCA solves every candidate with `optimistix.Newton` and the few
 that fail again with `SafeguardedNewton` (`gearjax.tca.analysis._retry_failed`): backtracking
 spends steps where plain Newton's overshoots would still have converged, so it needs
 more steps than Newton on the problems Newton solves. `SafeguardedNewton` takes the same full Newton steps while they

@@ -71,8 +71,7 @@ class Accuracy(eqx.Module):
             slices, so the approach there depends on the slice width (it grows without
             limit as the slices shrink), while the work done below a tenth of the impact
             force is 1-2 % of the impact energy. With (0.02, 1) the seed pair's edge-regime
-            impact force moved by 8-9 % between 21 and 161 slices, with (0.1, 1) by 1.1-1.3 %
-            (issue #12; `tools/diagnostics/issue12/impact_fit.py`).
+            impact force moved by 8-9 % between 21 and 161 slices, with (0.1, 1) by 1.1-1.3 %.
         dtype: "float64" (reference; needs `jax.config.update("jax_enable_x64", True)`)
             or "float32".
     """

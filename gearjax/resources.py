@@ -1,5 +1,5 @@
 """Memory a scene's compiled program needs, estimated before compiling, and the guard that
-refuses a scene that cannot fit (issue #12, part 5).
+refuses a scene that cannot fit.
 
 The arrays that grow fastest are the loaded contact's: for every position (all at once,
 `vmap`) and tooth pair, the (S × S) block of the slices' mutual compliances and the Newton

@@ -258,7 +258,7 @@ def _search(ctx: _Context, column, lower, upper, gap_lower, gap_upper, found) ->
     So a bracket end is checked before the search relies on it: where the Newton step
     leaves the bracket past an end whose sign was never evaluated, or the bracket shrinks
     onto it, the next point is that end; if its sign is the wrong one the bracket moves
-    outwards by its initial width and the new end is checked (issue #12: 5 of 400 random
+    outwards by its initial width and the new end is checked (5 of 400 random
     29/71 designs had $H > 0$ at the grid's lower end, so the search shrank onto it and
     never converged). Converged once $|H| \\le$ atol and either the Newton step or the bracket is
     below atol + rtol$|\\varphi_1|$ (the tolerances of `Accuracy.newton_atol/rtol`, floored

@@ -207,7 +207,7 @@ def _fraction_to_boundary(loads, new_loads):
     Palmgren's law $aF^{0.9}$ is concave, so a full Newton step from above a point's root
     overshoots, possibly below zero, where the smoothed law is flat: from there the next
     step returns to the same point above the root, and the iteration cycles with the active
-    set fixed (issue #12: seed 001's pair at 81 slices, 1000 N·m, one position; the loads of
+    set fixed (seed 001's pair at 81 slices, 1000 N·m, one position; the loads of
     one point alternated between 48.3 and -1.26 N). The damped steps keep the loads
     positive, where the law's linearisation is not flat. Used only for steps that keep the
     active set: a step that changes it is taken in full, so a point leaving contact is

@@ -25,7 +25,7 @@ curve of coincident points, i.e. if $\Delta$ rises towards the tip there
 inside the active flanks touches first; if the flank solve missed it (Newton went to a
 root beyond the tip, which the selection rejects), the flank candidate counts as failed
 and the analysis solves it again from the edge contact with the damped Newton
-(`solve_again`; issue #12: on random designs with deep reliefs the flank root beyond the
+(`solve_again`: on random designs with deep reliefs the flank root beyond the
 tip hid the interior one at some pinion angles, so the slice value jumped by up to 3e-4
 rad between neighbouring angles).
 
@@ -183,7 +183,7 @@ def _within(u, limits, tol):
 def _starts(problem: SliceProblem):
     """Starting points of the three candidates: the conjugate contact for the flank, held
     to the active flanks (beyond a tip a relief's parabola, extrapolated, tilts the flank
-    so far that Newton runs off: issue #12); for an edge, the mate's flank point at the
+    so far that Newton runs off); for an edge, the mate's flank point at the
     radius of the tip corner."""
     pair = problem.pair
     lim1, lim2 = pair.profile_limits(0), pair.profile_limits(1)
@@ -300,8 +300,8 @@ def edge_reachable(problem: SliceProblem):
     sampled at `REACH_SAMPLES` points of the active flank, ends included (the radius of a
     gear flank point grows with $u_2$; the pinion flank's distance from $O_2$ is monotone
     along it on involute flanks near the mesh), and a corner outside its range by more than
-    `_parameter_tolerance` cannot touch: its failed solve misses no contact (issue #12:
-    17/170 random design 68, where the gear's tip circle misses the pinion's active flank at
+    `_parameter_tolerance` cannot touch: its failed solve misses no contact
+    (17/170 random design 68, where the gear's tip circle misses the pinion's active flank at
     one slice and the edge solve, with no root to find, diverged)."""
     pair = problem.pair
     (lo1, hi1), (lo2, hi2) = pair.profile_limits(0), pair.profile_limits(1)

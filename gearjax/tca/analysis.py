@@ -157,7 +157,7 @@ def fallback_capacity(candidates: int) -> int:
 def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
     """Solve the failed candidates of a (positions, pairs, slices, 3) grid again with
     `solver` (`SafeguardedNewton`): plain Newton can cycle where a relief's curvature jumps
-    inside the contact's reach (issue #12: 6 of 400 random 29/71 designs missed loaded
+    inside the contact's reach (6 of 400 random 29/71 designs missed loaded
     contacts at `fast`). The failures are gathered into a fixed number of problems
     (`fallback_capacity`; failures beyond it stay failed), solved from their starts and
     scattered back, so the fallback costs a few dozen solves whatever the grid's size, and
