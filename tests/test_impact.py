@@ -2,6 +2,7 @@
 
 import math
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -268,6 +269,28 @@ def test_bad_fit_range_is_rejected(fit):
         gj.Accuracy(impact_fit_range=fit)
 
 
+#: The GA optimum of the seed 001 search before the continuous first contact: its gear tip
+#: edge crosses the pinion's 0.5 mm, 24 um root relief, touching over ~1 mm of the face.
+NARROW_EDGE = jnp.array([0.0243989, 0.0467365, 0.5, 0.5, 0.0244536, 19.0266364])
+
+
+def test_first_contact_leaves_no_overlap_anywhere_on_the_face(seed_pair):
+    """At the first contact found on 9 slices, the incoming pair's rigid offset on 401
+    slices nowhere exceeds the loaded approach of the others (the searched maximum over the
+    face is continuous); taking the best of the 9 slices left the edge 12 urad into the
+    flank at 21 slices and found a later flank contact."""
+    imp = impact(seed_pair, NARROW_EDGE, 1000.0)
+    assert gj.enum_name(imp.result) == "successful"
+    sc = gj.scene._prepare(scene(seed_pair, NARROW_EDGE, 1000.0))
+    fine = eqx.filter_jit(gj.tooth_contact_analysis)(
+        sc.pair, sc.depth, accuracy=ACC.replace(face_slices=401), pairs=sc.pairs,
+        pinion_angles=jnp.asarray([imp.pinion_angle]))
+    column = list(sc.pairs).index(int(imp.pair_index))
+    offsets = jnp.where(fine.valid[0, column], fine.slice_te[0, column], -jnp.inf)
+    assert float(jnp.max(offsets) - imp.loaded_te) <= 1e-9
+    assert imp.regime == ImpactRegime.edge
+
+
 def test_first_contact_search_is_a_root_in_a_few_newton_steps(seed_pair):
     """The safeguarded Newton search stops at a root of the gap H (|H| within the
     tolerance) after a few evaluations, at the angle a tight bisection of the same H on the
@@ -287,7 +310,7 @@ def test_first_contact_search_is_a_root_in_a_few_newton_steps(seed_pair):
 
         @jax.jit
         def gap(phi1, column=column, ctx=ctx):
-            (te, lte, _), _ = analysis._evaluate(ctx, column, phi1)
+            (te, lte, _, _), _ = analysis._evaluate(ctx, column, phi1)
             return te - lte
 
         root = float(imp.pinion_angle)

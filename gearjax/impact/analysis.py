@@ -1,19 +1,22 @@
 r"""Mesh-in impact: first contact of the incoming tooth pair under load (seed 001).
 
-**First contact.** Follow one tooth pair $k$ as the pinion turns. Its slices $j$ would
-touch at the gear offsets $\Delta_{kj}(\varphi_1)$ of the unloaded TCA (flank, tip-edge and
-face-end candidates alike), while the pairs already in mesh hold the gear at their loaded
+**First contact.** Follow one tooth pair $k$ as the pinion turns. Its flank, tip-edge and
+face-end candidates would touch at the gear offsets $\Delta_k(z, \varphi_1)$ of the
+unloaded TCA along the face, while the pairs already in mesh hold the gear at their loaded
 transmission error $\mathrm{LTE}_{\neg k}(\varphi_1)$, computed by the LTCA with pair $k$
 unloaded. Pair $k$ is clear while
 
-$$H(\varphi_1) = \max_j \Delta_{kj}(\varphi_1) - \mathrm{LTE}_{\neg k}(\varphi_1) < 0,$$
+$$H(\varphi_1) = \max_z \Delta_k(z, \varphi_1) - \mathrm{LTE}_{\neg k}(\varphi_1) < 0,$$
 
 i.e. while its rigid gap (geometry, modifications, errors) exceeds the loaded approach of
-the others, and first touches at the root $\varphi_1^*$ of $H$. The cycle grid of the
-scene's TCA/LTCA brackets the first upward crossing (with pair $k$ unloaded before its
-first contact, the scene's LTE equals $\mathrm{LTE}_{\neg k}$ there). The first touching
-candidate gives the point M, its normal and the **regime**: `edge` when it is a tip edge,
-`surface` when it is a flank point. The same search serves every tooth family.
+the others, and first touches at the root $\varphi_1^*$ of $H$. The maximum over the face
+is continuous in $z$ (`tca.face_peak`: around the best slice, the face ends included), not
+the best slice's: a tip edge crossing a short relief touches over a stretch of the face
+narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the
+first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
+equals $\mathrm{LTE}_{\neg k}$ there). The first touching candidate gives the point M at
+$z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
+flank point. The same search serves every tooth family.
 
 **Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
 binding slice or candidate changes, or where the LTCA's active set does), so a
@@ -70,6 +73,8 @@ from .._solution import RESULTS, enum_name, enum_where, first_failure
 from ..ltca.analysis import LTCAResult, _levers, loaded_contact_analysis, moment_arms
 from ..ltca.model import ContactModel
 from ..tca import ContactKind, TCAResult, tooth_contact_analysis
+from ..tca._slice import contact_kind
+from ..tca.face_peak import FacePeak, face_peak
 from .energy import equivalent_mass, gear_inertia, impact_force, seed_equivalent_mass
 from .stiffness import LocalStiffness, local_stiffness
 
@@ -169,13 +174,14 @@ class _Context(eqx.Module):
 
 
 class _Contact(eqx.Module):
-    """The incoming pair $k$ at one pinion angle: its rigid offset $\\max_j\\Delta_{kj}$ (`te`),
-    the loaded TE of the other pairs (`lte`), the TCA at that angle, and the rates of both
-    offsets along $\\varphi_1$."""
+    """The incoming pair $k$ at one pinion angle: its rigid offset $\\max_z\\Delta_k$ (`te`),
+    the loaded TE of the other pairs (`lte`), the TCA at that angle, the first touching
+    point along the face (`peak`), and the rates of both offsets along $\\varphi_1$."""
 
     te: Scalar
     lte: Scalar
     tca: TCAResult
+    peak: FacePeak
     te_slope: Scalar
     lte_slope: Scalar
 
@@ -192,24 +198,27 @@ class _Contact(eqx.Module):
 
 def _evaluate(ctx: _Context, column, phi1):
     """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
-    incoming pair's first-touching slice: `(te, lte, tca), (j, solved)`."""
-    tca = tooth_contact_analysis(
-        ctx.pair, ctx.depth, accuracy=ctx.model.accuracy, pairs=ctx.pairs, pinion_angles=phi1[None]
-    )
+    incoming pair's first touching point along the face (`face_peak`, continuous in $z$
+    around the best slice $j$): `(te, lte, tca, peak), (j, solved)`."""
+    acc = ctx.model.accuracy
+    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None])
     active = jnp.arange(len(ctx.pairs)) != column
     ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
-    return (offsets[j], ltca.transmission_error[0], tca), (j, ltca.converged[0])
+    spacing = ctx.pair.face_width / acc.face_slices
+    peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
+                     spacing)
+    return (peak.te, ltca.transmission_error[0], tca, peak), (j, ltca.converged[0])
 
 
 def _with_rates(ctx: _Context, column, phi1):
     """`_evaluate` and, in the same forward-mode pass, the rates of both offsets along
     $\\varphi_1$: `(contact, (j, solved))`."""
-    (te, lte, tca), (dte, dlte, _), aux = jax.jvp(
+    (te, lte, tca, peak), (dte, dlte, _, _), aux = jax.jvp(
         lambda p: _evaluate(ctx, column, p), (phi1,), (jnp.ones_like(phi1),), has_aux=True
     )
-    return _Contact(te, lte, tca, dte, dlte), aux
+    return _Contact(te, lte, tca, peak, dte, dlte), aux
 
 
 class _Search(eqx.Module):
@@ -355,7 +364,7 @@ def _first_contact_jvp(primals, tangents):
     )
 
     def gap(d):
-        (te, lte, _), _ = _evaluate(eqx.combine(d, static), column, root)
+        (te, lte, _, _), _ = _evaluate(eqx.combine(d, static), column, root)
         return te - lte
 
     _, gap_tangent = jax.jvp(gap, (diff,), (d_ctx,))
@@ -454,15 +463,16 @@ def _impact_at(ctx: _Context, column, search: _Search, speed, inertia, found) ->
     phi1, j, solved = search.pinion_angle, search.slice_index, search.solved
     contact = search.contact
     te, lte, tca, dte, dlte = contact.te, contact.lte, contact.tca, contact.te_slope, contact.lte_slope
-    x1 = tca.pinion_point[0, column, j]
-    n = tca.normal[0, column, j]
-    kind = jax.tree_util.tree_map(lambda v: v[0, column, j], tca.kind)
+    peak = contact.peak
+    x1 = peak.pinion_point
+    n = peak.normal
+    kind = contact_kind(peak.contact.kind)
     center2 = pair.center(1)
     p_arm, q_arm = moment_arms(x1, n, center2)
     r2 = x1[:2] - center2
     # v12 = v1 - v2; the loaded gear turns faster by LTE' w1 about its axis (-z).
     gear_extra = jnp.stack([r2[1], -r2[0], jnp.zeros_like(r2[0])])  # (-e_z) x r2
-    v12 = speed * (tca.relative_velocity[0, column, j] - dlte * gear_extra)
+    v12 = speed * (peak.relative_velocity - dlte * gear_extra)
     velocity = jnp.dot(v12, n)
     fit = _local_fit(ctx, tca, column, p_arm)
 
@@ -484,14 +494,14 @@ def _impact_at(ctx: _Context, column, search: _Search, speed, inertia, found) ->
         result=result,
         pair_index=jnp.asarray(ctx.pairs)[column],
         pinion_angle=phi1,
-        slice_z=tca.slice_z[j],
+        slice_z=peak.z,
         kind=kind,
         regime=enum_where(kind == ContactKind.flank, ImpactRegime.surface, ImpactRegime.edge),
         pinion_point=x1,
-        gear_point=tca.gear_point[0, column, j],
+        gear_point=peak.gear_point,
         normal=n,
-        pinion_parameter=tca.pinion_parameter[0, column, j],
-        gear_parameter=tca.gear_parameter[0, column, j],
+        pinion_parameter=peak.contact.pinion_parameter,
+        gear_parameter=peak.contact.gear_parameter,
         loaded_te=lte,
         te_slope=dte,
         lte_slope=dlte,

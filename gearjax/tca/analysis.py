@@ -273,36 +273,38 @@ def _binding_te(pair, depth, phi, ks, z, contact: SliceContact, slice_te, n_mid:
     return jnp.max(jnp.maximum(mid, ends), axis=-1)
 
 
-def _contact_geometry(pair, depth, phi, ks, z, contact: SliceContact, slice_te):
-    """Points on both flanks, the pinion's outward unit normal, the relative velocity per
-    unit pinion speed and $|n_t|$ of every slice contact, each gear turned to the slice's
-    own touching position `slice_te`."""
+def contact_point(pair, depth, phi1, k, zz, u1, u2, te_slice):
+    """One slice contact's points on both flanks, the pinion's outward unit normal, the
+    relative velocity per unit pinion speed and $|n_t|$, the gear turned to the slice's own
+    touching position `te_slice` (pinion angle `phi1`, pair `k`, axial `zz`)."""
     ratio = 1.0 / pair.gear_ratio
+    rot1 = phi1 - k * pair.angular_pitch(0)
+    rot2 = ratio * phi1 - k * pair.angular_pitch(1) + te_slice
 
-    def points(phi1, k, zz, u1, u2, te_slice):
-        rot1 = phi1 - k * pair.angular_pitch(0)
-        rot2 = ratio * phi1 - k * pair.angular_pitch(1) + te_slice
+    def surface1(uz):
+        d = depth(pair, 0, k, uz[0], uz[1])
+        return pair.flank_point(0, uz[0], uz[1], rot1, d)
 
-        def surface1(uz):
-            d = depth(pair, 0, k, uz[0], uz[1])
-            return pair.flank_point(0, uz[0], uz[1], rot1, d)
+    x1 = surface1(jnp.stack([u1, zz]))
+    jac = jax.jacfwd(surface1)(jnp.stack([u1, zz]))
+    n = jnp.cross(jac[:, 0], jac[:, 1])
+    n = n / jnp.linalg.norm(n)
+    # Orient outwards: along the planar outward normal of the pinion profile.
+    planar_out = pair.profile_normal(0, u1)
+    sense = jnp.sign(jnp.dot(n[:2], rotate2(rot1 + pair.lead_rotation(0, zz), planar_out)))
+    n = n * jnp.where(sense == 0, 1.0, sense)
+    x2 = pair.flank_point(1, u2, zz, rot2, depth(pair, 1, k, u2, zz))
+    omega1 = jnp.array([0.0, 0.0, 1.0], dtype=x1.dtype)
+    omega2 = jnp.array([0.0, 0.0, -ratio], dtype=x1.dtype)
+    o2 = jnp.concatenate([pair.center(1), jnp.zeros((1,), x1.dtype)])
+    v12 = jnp.cross(omega1, x1) - jnp.cross(omega2, x1 - o2)
+    frac = pair.transverse_normal_fraction(0, u1, zz)
+    return x1, x2, n, v12, frac
 
-        x1 = surface1(jnp.stack([u1, zz]))
-        jac = jax.jacfwd(surface1)(jnp.stack([u1, zz]))
-        n = jnp.cross(jac[:, 0], jac[:, 1])
-        n = n / jnp.linalg.norm(n)
-        # Orient outwards: along the planar outward normal of the pinion profile.
-        planar_out = pair.profile_normal(0, u1)
-        sense = jnp.sign(jnp.dot(n[:2], rotate2(rot1 + pair.lead_rotation(0, zz), planar_out)))
-        n = n * jnp.where(sense == 0, 1.0, sense)
-        x2 = pair.flank_point(1, u2, zz, rot2, depth(pair, 1, k, u2, zz))
-        omega1 = jnp.array([0.0, 0.0, 1.0], dtype=x1.dtype)
-        omega2 = jnp.array([0.0, 0.0, -ratio], dtype=x1.dtype)
-        o2 = jnp.concatenate([pair.center(1), jnp.zeros((1,), x1.dtype)])
-        v12 = jnp.cross(omega1, x1) - jnp.cross(omega2, x1 - o2)
-        frac = pair.transverse_normal_fraction(0, u1, zz)
-        return x1, x2, n, v12, frac
 
+def _contact_geometry(pair, depth, phi, ks, z, contact: SliceContact, slice_te):
+    """`contact_point` of every slice contact, (pos, pair, slice, ...)."""
+    points = ft.partial(contact_point, pair, depth)
     return jax.vmap(
         jax.vmap(jax.vmap(points, (None, None, 0, 0, 0, 0)), (None, 0, None, 0, 0, 0)),
         (0, None, None, 0, 0, 0),
