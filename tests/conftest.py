@@ -23,6 +23,14 @@ os.environ["GEARJAX_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
 os.environ["JAX_COMPILATION_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
 os.environ["JAX_COMPILATION_CACHE_MAX_SIZE"] = str(64 * 2**30)  # a limit, so that JAX locks
 os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0.2"  # gearjax.cache.MIN_COMPILE_TIME_S
+# The suite compiles far more than it runs: without LLVM's optimisation passes XLA's CPU
+# backend compiles the default scene's program in about 60 % of the time and runs it about
+# 2.5x slower (`benchmarks/trace_compile.py` under these flags; docs/test_suite.md). No
+# fast-math either way, so the arithmetic is the same. Inherited by the workers, the
+# subprocesses and the notebook kernels.
+TEST_XLA_FLAGS = ("--xla_backend_optimization_level=0", "--xla_llvm_disable_expensive_passes=true")
+_flags = os.environ.get("XLA_FLAGS", "")
+os.environ["XLA_FLAGS"] = " ".join([_flags, *(f for f in TEST_XLA_FLAGS if f not in _flags)]).strip()
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
