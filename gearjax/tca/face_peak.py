@@ -27,6 +27,13 @@ once for the search (and once more for the differentiable value at $z^*$).
 Derivatives follow the envelope theorem: the search runs on stop-gradient'ed data and
 $g^*$ is evaluated at the found $z^*$, so $\mathrm dg^*/\mathrm d\theta = \partial g/\partial
 \theta\,(z^*)$, exact at a smooth interior maximum or a face end, one-sided at a kink.
+A last round places a smooth interior maximum at the vertex of the parabola through $z^*$
+and its neighbours at $\pm h$ (`_vertex`), and the differentiable evaluation does it once
+more around that point: the search, comparing values, places it only to
+about $\sqrt{\epsilon}$ of the stretch, and what is evaluated there (the strike point,
+its normal and velocity) must move with the maximum as the design changes
+($\mathrm dz^*/\mathrm d\theta = -g_{z\theta}/g_{zz}$); at a face end or a kink $z^*$ is
+pinned.
 """
 
 from __future__ import annotations
@@ -48,6 +55,8 @@ from .analysis import _lead_correction, _plane_of_action_slice, _retry_failed, c
 GRID_POINTS = 9
 #: rounds: the stretch (two slice spacings at most) shrinks by (2/8)^16 = 2e-10
 GRID_ROUNDS = 16
+#: step $h$ of the parabola around $z^*$ (`_vertex`), in slice spacings
+FD_STEP = 1e-3
 
 
 class FacePeak(eqx.Module):
@@ -106,20 +115,66 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
     lo = jnp.clip(z0 - spacing, -half, half)
     hi = jnp.clip(z0 + spacing, -half, half)
     fractions = jnp.linspace(0.0, 1.0, GRID_POINTS, dtype=z0.dtype)
+    step = FD_STEP * spacing
+    around = step * jnp.zeros(GRID_POINTS, z0.dtype).at[:3].set(jnp.array([-1.0, 0.0, 1.0], z0.dtype))
 
-    def refine(_, state):
+    def interior(z):
+        return (z - step > -half) & (z + step < half)
+
+    def refine(r, state):
+        # rounds 0 .. GRID_ROUNDS - 1 refine the grid; the last one moves a smooth maximum
+        # to its vertex (`_vertex` on z* +- h, the same 9-point solve: one trace)
         lo, hi, z_best, g_best = state
-        zs = lo + fractions * (hi - lo)
-        gs = slice_values(frozen[0], frozen[1], accuracy, k, fixed_phi, zs)[1]
+        polish = r == GRID_ROUNDS
+        zs = jnp.where(polish, jnp.clip(z_best + around, -half, half), lo + fractions * (hi - lo))
+        contacts, gs = slice_values(frozen[0], frozen[1], accuracy, k, fixed_phi, zs)
         i = jnp.argmax(gs)
         better = gs[i] > g_best
-        z_best, g_best = jnp.where(better, zs[i], z_best), jnp.where(better, gs[i], g_best)
+        z_grid, g_grid = jnp.where(better, zs[i], z_best), jnp.where(better, gs[i], g_best)
+        first3 = jax.tree_util.tree_map(lambda x: x[:3], contacts)
+        shift, g_vertex, _ = _vertex(first3, gs[:3], step, interior(z_best))
+        z_best = jnp.where(polish, z_best + shift, z_grid)
+        g_best = jnp.where(polish, jnp.where(shift != 0.0, g_vertex, g_best), g_grid)
         return zs[jnp.maximum(i - 1, 0)], zs[jnp.minimum(i + 1, GRID_POINTS - 1)], z_best, g_best
 
     # the best slice competes with the search
-    _, _, z_found, _ = jax.lax.fori_loop(0, GRID_ROUNDS, refine, (lo, hi, z0, g0))
+    _, _, z_found, _ = jax.lax.fori_loop(0, GRID_ROUNDS + 1, refine, (lo, hi, z0, g0))
     z_star = jax.lax.stop_gradient(z_found)
-    contact, te = jax.tree_util.tree_map(lambda x: x[0], slice_values(pair, depth, accuracy, k, phi1, z_star[None]))
-    x1, x2, n, v12, _ = contact_point(pair, depth, phi1, k, z_star, contact.pinion_parameter,
+    # z* and its neighbours at +-h in one vmapped solve, differentiable: a smooth maximum
+    # moves with the data to the vertex of their parabola (`_vertex`)
+    zs = jnp.clip(z_star + step * jnp.array([-1.0, 0.0, 1.0], z_star.dtype), -half, half)
+    contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs)
+    shift, te, contact = _vertex(contacts, gs, step, interior(z_star))
+    x1, x2, n, v12, _ = contact_point(pair, depth, phi1, k, z_star + shift, contact.pinion_parameter,
                                       contact.gear_parameter, jnp.where(jnp.isfinite(te), te, 0.0))
-    return FacePeak(z_star, te, contact, x1, x2, n, v12)
+    return FacePeak(z_star + shift, te, contact, x1, x2, n, v12)
+
+
+def _vertex(contacts: SliceContact, gs, step, interior):
+    r"""A smooth interior maximum placed at the vertex of the parabola through $g$ at
+    $z^* - h, z^*, z^* + h$: `(shift, g, contact)`, the vertex's offset from $z^*$, the
+    parabola's value there and the slice contact with its parameters moved along their
+    central differences.
+
+    The search compares values, so it places a smooth maximum only to about
+    $\sqrt\epsilon$ of its stretch (1e-6 mm on the seed pair), where the vertex is set
+    by the slope's rounding (1e-9 mm); and the vertex moves with the data $\theta$ (pinion
+    angle, design) as $\mathrm dz^*/\mathrm d\theta = -g_{z\theta}/g_{zz}$ (implicit
+    function theorem on $g_z = 0$), so the strike point, its normal and its velocity follow
+    the maximum as the design changes. At a face end, at a kink (the three points'
+    candidates differ) or where the parabola is not concave, $z^*$ stays (pinned)."""
+    same = jnp.all(contacts.valid) & jnp.all(contacts.kind == contacts.kind[1]) & jnp.all(jnp.isfinite(gs))
+    g = jnp.where(same, gs, 0.0)
+    curvature = jax.lax.stop_gradient((g[2] - 2.0 * g[1] + g[0]) / step**2)
+    smooth = interior & same & (curvature < 0.0)
+    slope = (g[2] - g[0]) / (2.0 * step)
+    shift = jnp.where(smooth, jnp.clip(-slope / jnp.where(smooth, curvature, -1.0), -step, step), 0.0)
+    value = jnp.where(smooth, g[1] + slope * shift + 0.5 * curvature * shift**2, gs[1])
+
+    def moved(u):
+        return u[1] + jnp.where(smooth, (u[2] - u[0]) / (2.0 * step), 0.0) * shift
+
+    contact = jax.tree_util.tree_map(lambda x: x[1], contacts)
+    contact = eqx.tree_at(lambda c: (c.pinion_parameter, c.gear_parameter), contact,
+                          (moved(contacts.pinion_parameter), moved(contacts.gear_parameter)))
+    return shift, value, contact
