@@ -181,7 +181,7 @@ def scene_digest(scene: Scene) -> str:
 
 
 def _accuracy_name(scene: Scene) -> str:
-    from .optimize.command import _accuracy_name
+    from .optimize.certification import accuracy_name
 
-    return _accuracy_name(scene.accuracy)
+    return accuracy_name(scene.accuracy)
 

@@ -5,6 +5,7 @@ One objective structure for the whole file (seed 001 pair, `fast` accuracy, 1000
 2 designs) are compiled once and shared by every test.
 """
 
+import dataclasses
 import json
 import signal
 import subprocess
@@ -24,6 +25,8 @@ from gearjax.papers.seed001 import paper_optimum
 POPULATION = 12
 STARTS = 2
 GENERATIONS = 12
+#: the certification accuracy of the GA runs: `fast` with finer face slices, one program
+CERTIFY = gj.Accuracy.preset("fast").replace(face_slices=13)
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +70,7 @@ def batch_values(objective, designs):
 def ga_run(objective, space, tmp_path_factory):
     run_dir = tmp_path_factory.mktemp("ga")
     result = go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
-                        seed=0, run_dir=run_dir)
+                        seed=0, run_dir=run_dir, certify=CERTIFY)
     return result, run_dir
 
 
@@ -76,9 +79,13 @@ def _simulate(objective, design):
 
 
 def test_objective_is_simulate_impact_force_and_batch_is_a_loop(objective, scene, designs, batch_values):
+    # Design 1's strike point is a smooth maximum along the face, placed at a parabola's
+    # vertex (`tca.face_peak`) to ~1e-9 mm by the rounding of its slope, which differs
+    # between the single and the vmapped program; v_n moves ~60 mm/s per mm along the face
+    # there, so the two agree to ~1e-9 on F_s.
     for i in (0, 1, 5):
         force = float(_simulate(objective, designs[i]).impact.force)
-        assert batch_values[i] == pytest.approx(force, rel=1e-9)
+        assert batch_values[i] == pytest.approx(force, rel=1e-8)
     # Every design scores (random design 3's first-contact search failed until the TCA fix
     # of issue #12). A design whose stages fail scores +inf and leaves the others alone:
     # y6 = b in place of design 3, out of range inside the program (`invalid_modification`).
@@ -113,7 +120,7 @@ def test_gradient_matches_central_differences_in_both_regimes(objective, space, 
         f = np.asarray(_batch_objective(objective, space.to_design(probe)))
         central = (f[0::2] - f[1::2]) / (2 * h)
         scale = np.max(np.abs(central))
-        assert values[k] == pytest.approx(float(_batch_objective(objective, np.repeat(designs[k][None], POPULATION, 0))[0]), rel=1e-9)
+        assert values[k] == pytest.approx(float(_batch_objective(objective, np.repeat(designs[k][None], POPULATION, 0))[0]), rel=1e-8)
         np.testing.assert_allclose(grads[k], central, rtol=1e-4, atol=1e-4 * scale)
 
 
@@ -173,7 +180,7 @@ def test_ga_is_reproducible_and_a_killed_run_resumes_to_the_same_result(ga_run, 
         go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
                    seed=0, run_dir=killed)
     resumed = go.genetic(objective, space, config=go.GAConfig(population=POPULATION), generations=GENERATIONS,
-                         seed=0, run_dir=killed, resume=True)
+                         seed=0, run_dir=killed, resume=True, certify=CERTIFY)
     assert resumed.history == result.history
     np.testing.assert_array_equal(resumed.best_design, result.best_design)
     full = [json.loads(x) for x in (run_dir / "history.jsonl").read_text().splitlines()]
@@ -190,13 +197,44 @@ def test_ga_is_reproducible_and_a_killed_run_resumes_to_the_same_result(ga_run, 
 def test_gradient_descent_lowers_the_objective_from_a_poor_start(objective, space):
     poor = np.asarray(space.lower)  # the least relief the bounds allow: hard edge contact
     result = go.gradient_descent(objective, space, config=go.GradientConfig(starts=STARTS, iterations=12),
-                                 seed=0, initial=np.stack([poor, poor + 0.25 * np.asarray(space.width)]))
+                                 seed=0, initial=np.stack([poor, poor + 0.25 * np.asarray(space.width)]),
+                                 certify="fast")  # the search's accuracy: certified values are its own
     start = result.history[0]
     assert np.isfinite(start)
-    assert result.best_objective < 0.8 * start
+    # 3 025 -> 2 520 N by iteration 6, where both starts stall (30 iterations give the
+    # same); with the first contact taken at the slices it had gone below 0.8 of the start
+    assert result.best_objective < 0.9 * start
     assert np.all(np.diff(result.history) <= 0.0)
     assert space.contains(result.best_design)
     assert result.gradient_evaluations == result.evaluations == STARTS * result.steps
+    assert result.certification.accuracy == "fast" and result.certified_objective == result.best_objective
+
+
+def test_the_result_is_the_best_certified_candidate(ga_run, objective):
+    """The GA's result is chosen among its best design and the 5 best distinct members of
+    the final population by the objective at the certification accuracy, which is
+    `simulate`'s impact force at that accuracy; the run directory keeps the certification."""
+    result, run_dir = ga_run
+    cert = result.certification
+    assert cert.accuracy == "custom" and cert.designs.shape == (6, 6)
+    assert len({tuple(d) for d in cert.designs}) == 6
+    assert cert.objective[0] == result.history[-1] and np.all(np.diff(cert.objective) >= 0.0)
+    assert not np.allclose(cert.certified, cert.objective, rtol=1e-6)  # another accuracy, other values
+    best = int(np.argmin(cert.certified))
+    np.testing.assert_array_equal(result.best_design, cert.designs[best])
+    assert result.best_objective == cert.objective[best] and result.certified_objective == cert.certified[best]
+    scene = objective.scene_for(cert.designs[best])
+    force = float(gj.simulate(dataclasses.replace(scene, accuracy=CERTIFY)).impact.force)
+    assert force == pytest.approx(result.certified_objective, rel=1e-8)  # see the first test
+    stored = json.loads((run_dir / "certification.json").read_text())
+    assert stored["certified"] == cert.certified.tolist()
+
+
+def test_certification_settings_are_checked_before_the_search(objective, space):
+    with pytest.raises(ValueError, match="certify must be"):
+        go.genetic(objective, space, generations=1, certify="exact")
+    with pytest.raises(ValueError, match="certify_top"):
+        go.gradient_descent(objective, space, certify_top=0)
 
 
 def test_sensitivities_agree_with_the_energy_method_the_descent_gradient_and_differences(objective, space, designs,
@@ -220,7 +258,7 @@ def test_sensitivities_agree_with_the_energy_method_the_descent_gradient_and_dif
     assert isinstance(both, list) and len(both) == 2
     for k, s in enumerate(both):
         impact = _simulate(objective, designs[k]).impact
-        assert s["objective"] == pytest.approx(float(impact.force), rel=1e-9)
+        assert s["objective"] == pytest.approx(float(impact.force), rel=1e-8)  # see the first test
         n = float(impact.stiffness.exponent)
         # F_s = ((n+1)/2 m v^2)^(n/(n+1)) K^(1/(n+1)) with v proportional to the speed
         assert s["speed"]["log_derivative"] == pytest.approx(2 * n / (n + 1), rel=1e-6)
@@ -297,6 +335,7 @@ def _scene_file(tmp_path, optimize: str) -> str:
         ("population = 1\n", "optimize.population"),
         ("tip_relief_um = [50.0, 10.0]\n", "tip_relief"),
         ("colour = 'red'\n", "optimize.colour"),
+        ("certify = 'exact'\n", "optimize.certify"),
     ],
 )
 def test_cli_rejects_a_bad_optimize_section(tmp_path, capsys, optimize, field):
@@ -312,7 +351,8 @@ def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, ca
     from gearjax.cli import main
     from gearjax.scene_file import load_scene
 
-    path = _scene_file(tmp_path, f"population = {POPULATION}\ngenerations = 2\ntip_relief_length = [0.5, 4.5]\n")
+    path = _scene_file(tmp_path, f"population = {POPULATION}\ngenerations = 2\ntip_relief_length = [0.5, 4.5]\n"
+                                 'certify = "fast"\n')
     out = tmp_path / "run"
     code = main(["optimize", path, "--out", str(out), "--json", "--quiet", "--no-cache"])
     captured = capsys.readouterr()
@@ -320,6 +360,9 @@ def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, ca
     o = json.loads(captured.out)["optimize"]
     assert o["method"] == "ga" and o["evaluations"] == 2 * POPULATION and len(o["history"]) == 2
     assert o["best_objective_N"] <= o["history"][0] and o["best_objective_N"] == o["history"][-1]
+    # certified at the search's own accuracy: the certified value is the search's
+    assert o["certification_accuracy"] == "fast" and o["certified_objective_N"] == o["best_objective_N"]
+    assert len(o["certified_candidates"]) == 6
     # the default scene's modification is the paper optimum: the library's objective of it
     assert o["initial_objective_N"] == pytest.approx(batch_values[0], rel=1e-6)
     assert set(o["best_modification"]) == {"root_relief_um", "tip_relief_um", "root_relief_length",

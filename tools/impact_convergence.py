@@ -7,7 +7,8 @@ paper optimum (Table 2) and `--random` designs drawn uniformly within seed 001's
 (seed 0). Each at 1 000 N·m and 5 000 rpm, the `default` preset with only `face_slices`
 changed; one compiled program per slice count for all designs (`vmap(simulate)`, in chunks
 of `--chunk`). Per design and slice count: F_s, the regime, the strike point's face
-coordinate z and pinion angle, and the result code. Every finished slice count is written
+coordinate z and pinion angle, the result code, the LTE peak-to-peak (µm, line of action)
+and the maximum Hertz pressure (MPa). Every finished slice count is written
 at once to FILE (default `docs/results/impact_convergence.json`) and a rerun with the same
 settings resumes from it. Prints the F_s table, each design's error against the finest
 slice count, the regime flips, and the observed order of convergence
@@ -61,10 +62,15 @@ def run_slices(named: dict, slices: int, chunk: int) -> dict:
     for start in range(0, len(names), chunk):
         part = names[start:start + chunk]
         part = part + [part[-1]] * (chunk - len(part))  # one batch shape: one program
-        out = fn(gj.stack_scenes([scene(named[n], slices) for n in part])).impact
+        sim = fn(gj.stack_scenes([scene(named[n], slices) for n in part]))
+        out = sim.impact
+        lte_pp = np.asarray(sim.ltca.lte_peak_to_peak_line) * 1e3
+        pressure = np.asarray(sim.ltca.max_pressure)
         for i, name in enumerate(part[: len(names[start:start + chunk])]):
             rows[name] = {
                 "force_N": float(out.force[i]),
+                "lte_peak_to_peak_um": float(lte_pp[i]),
+                "max_pressure_MPa": float(pressure[i]),
                 "regime": gj.enum_name(out.regime)[i],
                 "slice_z_mm": float(out.slice_z[i]),
                 "pinion_angle_rad": float(out.pinion_angle[i]),
@@ -101,6 +107,11 @@ def report(study: dict) -> None:
             flips.append(name)
         print(f"{name:22s}" + "".join(f"{c:>22s}" for c in cells))
     print("largest |error| per slice count:", {n: f"{100 * w:.1f} %" for n, w in worst.items()})
+    for key in ("lte_peak_to_peak_um", "max_pressure_MPa"):
+        if all(key in study["runs"][str(n)]["rows"][names[0]] for n in slices):
+            errs = {n: max(abs(study["runs"][str(n)]["rows"][m][key] / study["runs"][finest]["rows"][m][key] - 1)
+                           for m in names) for n in slices}
+            print(f"largest |error| of {key}:", {n: f"{100 * e:.1f} %" for n, e in errs.items()})
     print("designs whose regime changes from 21 slices on:", flips or "none")
     for a, b, c in zip(slices, slices[1:], slices[2:]):
         ps = [order(*(study["runs"][str(m)]["rows"][name]["force_N"] for m in (a, b, c)), b / a) for name in names]

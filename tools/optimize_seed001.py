@@ -69,12 +69,15 @@ def run_case(name, objective, space, args, runs):
     t = time.perf_counter()
     gd = go.gradient_descent(objective, space, config=cfg, seed=0, progress="lines")
     gd_time = time.perf_counter() - t
-    best = min(ga.best_objective, gd.best_objective)
+    best = min(min(ga.history), min(gd.history))
     per = objective.torques.shape[0] * objective.samples
     out = {}
     for label, result, wall, step_evals in (("ga", ga, ga_time, args.population * per), ("gradient", gd, gd_time, args.starts * per)):
         out[label] = {
             "best_objective_N": result.best_objective,
+            "certified_objective_N": result.certified_objective,
+            "certification_accuracy": result.certification.accuracy,
+            "certified_candidates": result.certification.to_dict(),
             "best_modification": go.design_dict(result.best_design),
             "history": result.history,
             "evaluations": result.evaluations,

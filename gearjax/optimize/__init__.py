@@ -3,9 +3,12 @@
 The pipeline: a `DesignSpace` (bounds, unit-cube coordinates) → an `Objective` (a pure
 function of the design vector over a load spectrum and error samples) → an optimiser
 (`genetic`, the GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected
-Adam) that writes every step to a run directory and resumes exactly.
+Adam) that writes every step to a run directory and resumes exactly → a certification of
+its best designs at a finer accuracy (`certify`), which picks the result.
 """
 
+from .certification import Certification as Certification
+from .certification import certify as certify
 from .ga import GAConfig as GAConfig
 from .ga import GAState as GAState
 from .ga import ga_ask as ga_ask

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .certification import accuracy_name
 from .run import genetic, gradient_descent
 from .settings import OptimizeSettings, SettingsError
 from .space import design_dict
@@ -31,16 +32,19 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
     try:
         if settings.method == "ga":
             result = genetic(objective, space, config=settings.ga_config(), generations=settings.generations,
-                             seed=settings.seed, run_dir=out, resume=resume, progress=progress)
+                             seed=settings.seed, run_dir=out, resume=resume, progress=progress,
+                             certify=settings.certify, certify_top=settings.certify_top)
         else:
             result = gradient_descent(objective, space, config=settings.gradient_config(), seed=settings.seed,
-                                      run_dir=out, resume=resume, progress=progress)
+                                      run_dir=out, resume=resume, progress=progress, certify=settings.certify,
+                                      certify_top=settings.certify_top)
     except ValueError as err:  # e.g. a run directory that holds another run
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
     best_scene = Path(out) / "best_scene.toml"
     best_scene.write_text(best_scene_toml(data, result.best_design))
     unit = "N" if objective.quantity == "force" else "mm/s"
+    cert = result.certification
     report = {
         "optimize": {
             "method": result.method,
@@ -49,9 +53,15 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
             "aggregate": objective.aggregate,
             "loads_Nm": (np.asarray(objective.torques) / 1000.0).tolist(),
             "error_samples": objective.samples,
-            "accuracy": _accuracy_name(objective.scene.accuracy),
+            "accuracy": accuracy_name(objective.scene.accuracy),
             "initial_objective_N": result.initial_objective,
             "best_objective_N": result.best_objective,
+            "certification_accuracy": None if cert is None else cert.accuracy,
+            "certified_objective_N": result.certified_objective,
+            "certified_candidates": None if cert is None else [
+                {"modification": design_dict(d), "objective_N": float(v), "certified_objective_N": float(c)}
+                for d, v, c in zip(cert.designs, cert.objective, cert.certified)
+            ],
             "initial_modification": design_dict(result.initial_design),
             "best_modification": design_dict(result.best_design),
             "evaluations": result.evaluations,
@@ -71,12 +81,6 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
     return 0
 
 
-def _accuracy_name(accuracy) -> str:
-    from ..accuracy import PRESETS
-
-    return next((name for name, preset in PRESETS.items() if preset == accuracy), "custom")
-
-
 def _read(path: str) -> str:
     from ..scene_file import SceneFileError
 
@@ -94,13 +98,24 @@ def summary(o: dict) -> str:
         + (f", {o['error_samples']} error samples" if o["error_samples"] > 1 else "")
         + f"; accuracy '{o['accuracy']}')",
         f"  initial design     {o['initial_objective_N']:.6g} {unit}",
-        f"  best design        {o['best_objective_N']:.6g} {unit}  "
+        f"  best design        {o['best_objective_N']:.6g} {unit} at '{o['accuracy']}'  "
         f"({o['steps']} steps, {o['evaluations']} evaluations, {o['wall_time_s']:.1f} s, "
         f"{'converged' if o['converged'] else 'not converged'})",
+        _certified_line(o, unit),
         "  best modification  " + ", ".join(f"{k} = {v:.4g}" for k, v in o["best_modification"].items()),
         f"  run directory      {o['run_dir']}  (best design: {o['best_scene']})",
     ]
     return "\n".join(lines)
+
+
+def _certified_line(o: dict, unit: str) -> str:
+    if o["certified_objective_N"] is None:
+        return "  certified          not certified (certify = \"none\")"
+    certified, best = o["certified_objective_N"], o["best_objective_N"]
+    change = f"{100.0 * (certified / best - 1.0):+.1f} %" if best else "n/a"
+    n = len(o["certified_candidates"])
+    return (f"  certified          {certified:.6g} {unit} at '{o['certification_accuracy']}' "
+            f"({change} against the search's value; best of {n} candidates)")
 
 
 def best_scene_toml(data: dict, design) -> str:

@@ -10,7 +10,9 @@ A run directory holds
   values, the best value and design so far, cumulative evaluations, elapsed time and the
   random state;
 * `state.npz`: the full optimiser state after the last finished step (random key,
-  population and fitness, or Adam's state), replaced atomically (`os.replace`).
+  population and fitness, or Adam's state), replaced atomically (`os.replace`);
+* `certification.json`: the best candidates evaluated at the certification accuracy
+  (`gearjax.optimize.certification`), written once the search is done and reused on resume.
 
 Resuming loads `state.npz`, drops history lines past its step (a step whose state was not
 yet saved), and continues. The state holds everything the next step depends on and every
@@ -21,6 +23,7 @@ designs, values and history of an uninterrupted one.
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import time
 
@@ -31,9 +34,11 @@ import numpy as np
 
 from .._custom_types import ArrayLike
 from .._validate import check_int
+from ..accuracy import Accuracy
 from ..cache import exclude_from_persistent_cache
 from ..progress import Progress, compiling
-from ..rundir import RunDirectory
+from ..rundir import RunDirectory, atomic_write
+from .certification import CERTIFY_TOP, Certification, accuracy_name, candidates, certification_accuracy, certify
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
 from .objective import Objective
@@ -48,8 +53,11 @@ class OptimizationResult:
 
     Attributes:
         method: "ga" or "gradient".
-        best_design: $(y_1, \\dots, y_6)$ (mm) of the best design found.
-        best_objective: its objective value (N or mm/s).
+        best_design: $(y_1, \\dots, y_6)$ (mm) of the best design: the lowest certified
+            value among the certified candidates, or the search's best without certification.
+        best_objective: its objective value at the search's accuracy (N or mm/s).
+        certified_objective: its objective at the certification accuracy (None without).
+        certification: the `Certification` of the candidates (None without).
         initial_objective: the objective of the scene's own modification.
         initial_design: that modification (mm).
         history: best value after each generation/iteration.
@@ -75,6 +83,8 @@ class OptimizationResult:
     wall_time_s: float
     converged: bool
     run_dir: str | None
+    certified_objective: float | None = None
+    certification: Certification | None = None
 
 
 # ---------------------------------------------------------------------------- compiled steps
@@ -178,8 +188,11 @@ def _initial_objective(method: str, objective: Objective, space: DesignSpace, de
     return float(_batch_value_and_grad(objective, space, space.to_unit(tiled))[0][0])
 
 
-def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch):
+def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch,
+         certify_accuracy, certify_top):
     check_int("steps (generations or iterations)", steps, 1)
+    check_int("certify_top", certify_top, 1)
+    certify_accuracy = certification_accuracy(certify_accuracy)
     if not isinstance(objective, Objective):
         raise ValueError("objective must be a gearjax.optimize.Objective (Objective.create(scene, ...))")
     start = time.perf_counter()
@@ -224,6 +237,12 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
     finally:
         bar.close()
     best, best_design = _best(method, state, space)
+    certification = None
+    if certify_accuracy is not None:
+        designs, values = candidates(method, state, space, certify_top)
+        certification = _certification(directory, objective, designs, values, certify_accuracy, certify_top, progress)
+        i = certification.best
+        best_design, best = certification.designs[i], float(certification.objective[i])
     history = [r["best_objective"] for r in records]
     if method == "gradient":
         converged = not bool(np.any(np.asarray(state.active)))
@@ -244,7 +263,25 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         wall_time_s=previous_time + time.perf_counter() - start,
         converged=converged,
         run_dir=None if directory is None else str(directory.path),
+        certified_objective=None if certification is None else float(certification.certified[certification.best]),
+        certification=certification,
     )
+
+
+def _certification(directory, objective, designs, values, accuracy, top, progress) -> Certification:
+    """`certify` the candidates, or the run directory's certification of the same
+    candidates at the same accuracy (a resumed run that had finished)."""
+    path = None if directory is None else directory.path / "certification.json"
+    if path is not None and path.exists():
+        stored = Certification.from_dict(json.loads(path.read_text()))
+        name = accuracy_name(accuracy)  # a custom accuracy is certified again
+        if stored.accuracy == name != "custom" and np.array_equal(stored.designs, designs):
+            return stored
+    with compiling("the certification program", mode=progress):
+        result = certify(objective, designs, values, accuracy=accuracy, top=top)
+    if path is not None:
+        atomic_write(path, json.dumps(result.to_dict(), indent=1).encode())
+    return result
 
 
 def _best(method, state, space: DesignSpace) -> tuple[float, np.ndarray]:
@@ -276,6 +313,8 @@ def genetic(
     resume: bool = False,
     progress: str | None = None,
     initial: ArrayLike | None = None,
+    certify: str | Accuracy | None = "reference",
+    certify_top: int = CERTIFY_TOP,
 ) -> OptimizationResult:
     """Minimise the objective with the genetic algorithm (`gearjax.optimize.ga`).
 
@@ -293,13 +332,18 @@ def genetic(
             None (quiet).
         initial: designs (mm, shape (m, 6)) placed in the first population (or used as the
             first starts), clipped to the bounds; by default the first population is random.
+        certify: accuracy at which the best candidates are evaluated again once the search
+            is done (a preset name or an `Accuracy`; `gearjax.optimize.certification`), or None.
+        certify_top: candidates certified besides the best design found (the best distinct
+            members of the final population, or the starts' best points).
     """
     config = GAConfig() if config is None else config
     space.check_fits(objective.scene)
     state = ga_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _ga_generation(objective, space, config, s)  # noqa: E731
-    return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step, config.population)
+    return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step,
+                config.population, certify, certify_top)
 
 
 def gradient_descent(
@@ -312,6 +356,8 @@ def gradient_descent(
     resume: bool = False,
     progress: str | None = None,
     initial: ArrayLike | None = None,
+    certify: str | Accuracy | None = "reference",
+    certify_top: int = CERTIFY_TOP,
 ) -> OptimizationResult:
     """Minimise the objective by projected Adam from `config.starts` Latin-hypercube starts
     (`gearjax.optimize.gradient`), all starts in one compiled call per iteration.
@@ -323,4 +369,5 @@ def gradient_descent(
     state = gradient_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
-    return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step, config.starts)
+    return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step,
+                config.starts, certify, certify_top)

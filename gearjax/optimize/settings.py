@@ -16,6 +16,9 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     max_lte_um = 2.0              # penalty limit on the loaded TE peak-to-peak [none]
     lte_penalty = 1000.0          # its weight [1000]
     accuracy = "default"          # accuracy preset of the search [the scene's]
+    certify = "reference"         # preset at which the best designs are evaluated again
+                                  #   and the best is chosen, or "none" ["reference"]
+    certify_top = 5               # candidates certified besides the best found [5]
     population = 40               # GA [40]
     generations = 30              # GA [30]
     starts = 8                    # gradient [8]
@@ -46,7 +49,8 @@ from .space import PARAMETERS, SCENE_KEYS, DesignSpace
 _KEYS = {
     "method", "objective", "loads_Nm", "load_weights", "aggregate", "error_samples", "misalignment_um",
     "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
-    "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "seed",
+    "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "seed", "certify",
+    "certify_top",
 } | {key for key, _ in SCENE_KEYS}
 
 
@@ -91,6 +95,8 @@ class OptimizeSettings:
     max_lte_um: float | None = None
     lte_penalty: float = 1000.0
     accuracy: str | None = None  # None: the scene's own
+    certify: str | None = "reference"  # None: no certification
+    certify_top: int = 5
     population: int = 40
     generations: int = 30
     starts: int = 8
@@ -123,8 +129,11 @@ class OptimizeSettings:
                 out[key] = tuple(float(_number(key, v, 0.0)) for v in value)
         if "loads_Nm" in out and any(v <= 0.0 for v in out["loads_Nm"]):
             raise _fail("loads_Nm", f"must be torques > 0 N·m; got {list(out['loads_Nm'])}")
+        if "certify" in table:
+            choice = _choice("certify", table["certify"], ("fast", "default", "reference", "none"))
+            out["certify"] = None if choice == "none" else choice
         for key, low in (("error_samples", 0), ("population", 2), ("generations", 1), ("starts", 1),
-                         ("iterations", 1), ("seed", 0)):
+                         ("iterations", 1), ("seed", 0), ("certify_top", 1)):
             if key in table:
                 out[key] = int(_number(key, table[key], low, integer=True))
         for key in ("misalignment_um", "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty",
