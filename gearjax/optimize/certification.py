@@ -78,12 +78,16 @@ class Certification:
                    np.asarray(data["certified"], float))
 
 
+def scene_with_accuracy(scene, accuracy: Accuracy):
+    """The scene with another (static) accuracy."""
+    return scene if scene.accuracy == accuracy else dataclasses.replace(scene, accuracy=accuracy)
+
+
 def with_accuracy(objective: Objective, accuracy: Accuracy) -> Objective:
     """The objective with its scene at another (static) accuracy."""
     if objective.scene.accuracy == accuracy:
         return objective
-    scene = dataclasses.replace(objective.scene, accuracy=accuracy)
-    return eqx.tree_at(lambda o: o.scene, objective, scene)
+    return eqx.tree_at(lambda o: o.scene, objective, scene_with_accuracy(objective.scene, accuracy))
 
 
 def certify(objective: Objective, designs, values=None, *, accuracy="reference", top: int = CERTIFY_TOP) -> Certification:

@@ -40,6 +40,7 @@ from typing import Any
 
 from ..accuracy import Accuracy
 from ..scene import Scene
+from .certification import scene_with_accuracy
 from .ga import GAConfig
 from .gradient import GradientConfig
 from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
@@ -162,7 +163,7 @@ class OptimizeSettings:
         except ValueError as err:
             raise SettingsError(f"optimize: {err}") from None
         if self.accuracy is not None:
-            scene = _with_accuracy(scene, Accuracy.preset(self.accuracy))
+            scene = scene_with_accuracy(scene, Accuracy.preset(self.accuracy))
         errors = None
         if self.error_samples > 0:
             errors = sample_errors(
@@ -193,10 +194,3 @@ class OptimizeSettings:
 
     def gradient_config(self) -> GradientConfig:
         return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate)
-
-
-def _with_accuracy(scene: Scene, accuracy: Accuracy) -> Scene:
-    """The scene with another (static) accuracy."""
-    if scene.accuracy == accuracy:
-        return scene
-    return dataclasses.replace(scene, accuracy=accuracy)
