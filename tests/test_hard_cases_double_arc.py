@@ -13,8 +13,8 @@ from _cases import (
     bad_fields,
     count_failures,
     failure_kinds,
-    forward,
     missed_contacts,
+    one_by_one,
     random_double_arc,
 )
 
@@ -42,7 +42,7 @@ def double_arc():
     """TCA results of the cases then the random designs."""
     rng = np.random.default_rng(20261128)
     designs = list(_cases().values()) + [random_double_arc(rng, pairs=WINDOW) for _ in range(RANDOM)]
-    return forward([gj.Scene(p, pairs=WINDOW, accuracy="fast") for p in designs])
+    return one_by_one([gj.Scene(p, pairs=WINDOW, accuracy="fast") for p in designs])
 
 
 @pytest.mark.parametrize("i, name", list(enumerate(CASES)), ids=CASES)
