@@ -1,6 +1,6 @@
 """Convergence of the mesh-in impact force in the face slices, on the seed 001 pair.
 
-    python tools/impact_convergence.py [--random 30] [--slices 11 21 41 81 161] [--out FILE]
+    python tools/impact_convergence.py [--random 30] [--slices 11 21 41 81 161] [--out FILE] [--markdown]
 
 Designs: the GA and gradient optima of `docs/results/optimize_seed001.json` (1 000 N·m), the
 paper optimum (Table 2) and `--random` designs drawn uniformly within seed 001's bounds
@@ -121,12 +121,51 @@ def report(study: dict) -> None:
                   f"(quartiles {np.percentile(ps, 25):.2f}, {np.percentile(ps, 75):.2f}; {len(ps)} designs)")
 
 
+def markdown(study: dict) -> str:
+    """The study's tables in Markdown (for `docs/impact_convergence.md`): F_s and regime per
+    slice count with the error against the finest, then the largest errors of F_s, the LTE
+    peak-to-peak and the maximum pressure per slice count, and the observed orders."""
+    slices = sorted(int(n) for n in study["runs"])
+    finest = str(slices[-1])
+    rows = {n: study["runs"][str(n)]["rows"] for n in slices}
+    names = list(study["designs"])
+    lines = ["| design | " + " | ".join(f"{n} slices" for n in slices) + " |",
+             "|---|" + "---:|" * len(slices)]
+    for name in names:
+        ref = rows[slices[-1]][name]["force_N"]
+        cells = []
+        for n in slices:
+            row = rows[n][name]
+            flag = "" if row["result"] == "successful" else f" ({row['result']})"
+            err = "" if str(n) == finest else f", {100 * (row['force_N'] / ref - 1):+.1f} %"
+            force = f"{row['force_N']:,.0f}".replace(",", "\u202f")
+            cells.append(f"{force} N {row['regime']}{err}{flag}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += ["", "| largest \\|error\\| against " + finest + " slices | " + " | ".join(str(n) for n in slices[:-1]) + " |",
+              "|---|" + "---:|" * (len(slices) - 1)]
+    for key, label in (("force_N", "F_s"), ("lte_peak_to_peak_um", "LTE peak-to-peak"),
+                       ("max_pressure_MPa", "maximum pressure")):
+        errs = [max(abs(rows[n][m][key] / rows[slices[-1]][m][key] - 1) for m in names) for n in slices[:-1]]
+        lines.append(f"| {label} | " + " | ".join(f"{100 * e:.1f} %" for e in errs) + " |")
+    flips = [m for m in names if len({rows[n][m]["regime"] for n in slices if n >= 21}) > 1]
+    lines += ["", f"Designs whose regime changes from 21 slices on: {', '.join(flips) if flips else 'none'}."]
+    for key, label in (("force_N", "F_s"), ("lte_peak_to_peak_um", "LTE peak-to-peak")):
+        for a, b, c in zip(slices, slices[1:], slices[2:]):
+            ps = [order(*(rows[k][m][key] for k in (a, b, c)), b / a) for m in names]
+            ps = [p for p in ps if p is not None]
+            if ps:
+                lines.append(f"Observed order of {label} from {a}/{b}/{c} slices: median {np.median(ps):.2f} "
+                             f"(quartiles {np.percentile(ps, 25):.2f}, {np.percentile(ps, 75):.2f}; {len(ps)} designs).")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--random", type=int, default=30)
     parser.add_argument("--slices", type=int, nargs="+", default=[11, 21, 41, 81, 161])
     parser.add_argument("--chunk", type=int, default=11)
     parser.add_argument("--out", type=Path, default=ROOT / "docs/results/impact_convergence.json")
+    parser.add_argument("--markdown", action="store_true", help="also print the tables in Markdown")
     args = parser.parse_args(argv)
     named = designs(args.random)
     study = {"designs": named, "runs": {}, "machine": {"jax": jax.__version__}}
@@ -144,6 +183,8 @@ def main(argv=None) -> None:
         tmp.replace(args.out)
     study["runs"] = {k: v for k, v in study["runs"].items() if int(k) in args.slices}
     report(study)
+    if args.markdown:
+        print(markdown(study))
 
 
 if __name__ == "__main__":
