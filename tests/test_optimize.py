@@ -216,9 +216,11 @@ def test_the_result_is_the_best_certified_candidate(ga_run, objective):
     `simulate`'s impact force at that accuracy; the run directory keeps the certification."""
     result, run_dir = ga_run
     cert = result.certification
-    assert cert.accuracy == "custom" and cert.designs.shape == (6, 6)
-    assert len({tuple(d) for d in cert.designs}) == 6
-    assert cert.objective[0] == result.history[-1] and np.all(np.diff(cert.objective) >= 0.0)
+    # the search's 6 candidates, best first, then the initial design unless it is one of them
+    assert cert.accuracy == "custom" and cert.designs.shape[0] in (6, 7) and cert.designs.shape[1] == 6
+    assert len({tuple(d) for d in cert.designs}) == cert.designs.shape[0]
+    assert cert.objective[0] == result.history[-1] and np.all(np.diff(cert.objective[:6]) >= 0.0)
+    assert any(np.allclose(d, result.initial_design, rtol=0, atol=1e-12) for d in cert.designs)
     assert not np.allclose(cert.certified, cert.objective, rtol=1e-6)  # another accuracy, other values
     best = int(np.argmin(cert.certified))
     np.testing.assert_array_equal(result.best_design, cert.designs[best])
@@ -228,6 +230,50 @@ def test_the_result_is_the_best_certified_candidate(ga_run, objective):
     assert force == pytest.approx(result.certified_objective, rel=1e-8)  # see the first test
     stored = json.loads((run_dir / "certification.json").read_text())
     assert stored["certified"] == cert.certified.tolist()
+
+
+def test_the_search_starts_from_the_scene_and_never_ends_worse(ga_run, objective, space):
+    """The scene's design (the paper optimum, inside this file's bounds) is the first
+    population's first member, is certified with the candidates, and the result is
+    certified no worse than it."""
+    result, run_dir = ga_run
+    first = json.loads((run_dir / "history.jsonl").read_text().splitlines()[0])
+    np.testing.assert_allclose(first["designs_mm"][0], result.initial_design, rtol=0, atol=1e-12)
+    assert first["objective"][0] == pytest.approx(result.initial_objective, rel=1e-12)
+    cert = result.certification
+    own = next(i for i, d in enumerate(cert.designs) if np.allclose(d, result.initial_design, rtol=0, atol=1e-12))
+    assert result.certified_objective <= cert.certified[own]
+    assert result.best_source == ("initial" if np.allclose(result.best_design, result.initial_design, atol=1e-12)
+                                  else "search")
+
+
+def test_a_search_that_finds_nothing_better_returns_the_initial_design(ga_run, objective, space):
+    """A GA of one generation whose population is the least relief the bounds allow (hard
+    edge contact) cannot beat a scene whose design is the file's GA result: the result is
+    the scene's design, certified, and says so."""
+    best = ga_run[0]
+    good = eqx.tree_at(lambda o: o.scene.modification, objective, gj.FlankModification.from_vector(best.best_design))
+    poor = np.repeat(np.asarray(space.lower)[None], POPULATION, axis=0)
+    result = go.genetic(good, space, config=go.GAConfig(population=POPULATION), generations=1, seed=0,
+                        initial=poor, certify=CERTIFY)
+    assert result.history[0] > result.initial_objective  # the search's best is worse than the start
+    assert result.best_source == "initial"
+    np.testing.assert_array_equal(result.best_design, best.best_design)
+    assert result.certified_objective == pytest.approx(best.certified_objective, rel=1e-10)
+
+
+def test_a_scene_without_a_modification_starts_from_the_unmodified_pair(scene, space, objective):
+    """An unmodified pair is optimised over the design space; its initial objective is the
+    unmodified pair's force (zero relief amounts: the same flanks)."""
+    plain = go.Objective.create(dataclasses.replace(scene, modification=None))
+    unmodified = np.asarray(gj.FlankModification().as_vector())
+    np.testing.assert_array_equal(np.asarray(plain.scene.modification.as_vector()), unmodified)
+    result = go.genetic(plain, space, config=go.GAConfig(population=POPULATION), generations=1, seed=0,
+                        certify=None)
+    np.testing.assert_array_equal(result.initial_design, unmodified)
+    assert result.initial_objective == pytest.approx(float(_simulate(objective, unmodified).impact.force), rel=1e-8)
+    assert result.best_objective <= result.initial_objective
+    assert not space.contains(unmodified)  # below the amounts' lower bounds: not in the population
 
 
 def test_certification_settings_are_checked_before_the_search(objective, space):
@@ -366,7 +412,8 @@ def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, ca
     assert o["best_objective_N"] <= o["history"][0] and o["best_objective_N"] == o["history"][-1]
     # certified at the search's own accuracy: the certified value is the search's
     assert o["certification_accuracy"] == "fast" and o["certified_objective_N"] == o["best_objective_N"]
-    assert len(o["certified_candidates"]) == 6
+    # the search's 6 candidates and the initial design (in the first population), unless it is one of them
+    assert len(o["certified_candidates"]) in (6, 7) and o["best_source"] == "search"
     # the default scene's modification is the paper optimum: the library's objective of it
     assert o["initial_objective_N"] == pytest.approx(batch_values[0], rel=1e-6)
     assert set(o["best_modification"]) == {"root_relief_um", "tip_relief_um", "root_relief_length",

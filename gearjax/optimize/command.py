@@ -56,6 +56,7 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
             "accuracy": accuracy_name(objective.scene.accuracy),
             "initial_objective_N": result.initial_objective,
             "best_objective_N": result.best_objective,
+            "best_source": result.best_source,
             "certification_accuracy": None if cert is None else cert.accuracy,
             "certified_objective_N": result.certified_objective,
             "certified_candidates": None if cert is None else [
@@ -97,11 +98,13 @@ def summary(o: dict) -> str:
         f"({o['aggregate']} over {', '.join(f'{t:g}' for t in o['loads_Nm'])} N·m"
         + (f", {o['error_samples']} error samples" if o["error_samples"] > 1 else "")
         + f"; accuracy '{o['accuracy']}')",
-        f"  initial design     {o['initial_objective_N']:.6g} {unit}",
+        f"  initial design     {o['initial_objective_N']:.6g} {unit} at '{o['accuracy']}'",
         f"  best design        {o['best_objective_N']:.6g} {unit} at '{o['accuracy']}'  "
         f"({o['steps']} steps, {o['evaluations']} evaluations, {o['wall_time_s']:.1f} s, "
         f"{'converged' if o['converged'] else 'not converged'})",
         _certified_line(o, unit),
+        *(["  the best design is the initial one: the search found nothing better"]
+          if o["best_source"] == "initial" else []),
         "  best modification  " + ", ".join(f"{k} = {v:.4g}" for k, v in o["best_modification"].items()),
         f"  run directory      {o['run_dir']}  (best design: {o['best_scene']})",
     ]

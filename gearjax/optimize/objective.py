@@ -38,6 +38,7 @@ from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._solution import RESULTS
 from .._validate import check_choice, check_int, check_range
 from ..geometry.errors import MeshErrors
+from ..geometry.modification import FlankModification
 from ..impact import ImpactRegime, impact_analysis
 from ..ltca import loaded_contact_analysis
 from ..scene import Scene, _prepare
@@ -139,7 +140,9 @@ class Objective(eqx.Module):
         """Check the inputs and build the objective.
 
         Args:
-            scene: a scene with a torque and `"impact"` in its effects (an involute pair).
+            scene: a scene with a torque and `"impact"` in its effects (an involute pair); a
+                scene without a modification is the unmodified pair (`FlankModification()`:
+                zero amounts), its design the initial one.
             torques / torques_Nm: the load spectrum in N·mm or N·m (give at most one; default
                 the scene's own torque): a non-empty list of finite torques > 0.
             weights: one weight >= 0 per load, with a positive sum (default equal).
@@ -155,8 +158,8 @@ class Objective(eqx.Module):
                 "the optimisation needs a scene with a torque and effects including 'impact' "
                 "(OperatingPoint(torque_Nm=...), effects=('impact',))"
             )
-        if scene.modification is None:
-            raise ValueError("the scene needs a pinion modification to optimise (modification=FlankModification(...))")
+        if scene.modification is None:  # an unmodified pair: the search starts from it
+            scene = dataclasses.replace(scene, modification=FlankModification())
         check_choice("quantity (objective)", quantity, QUANTITIES)
         check_choice("aggregate", aggregate, AGGREGATES)
         check_int("batch_size", batch_size, 1)

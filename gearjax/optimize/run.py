@@ -57,9 +57,15 @@ class OptimizationResult:
             value among the certified candidates, or the search's best without certification.
         best_objective: its objective value at the search's accuracy (N or mm/s).
         certified_objective: its objective at the certification accuracy (None without).
-        certification: the `Certification` of the candidates (None without).
-        initial_objective: the objective of the scene's own modification.
-        initial_design: that modification (mm).
+        certification: the `Certification` of the candidates, the initial design last
+            unless it is one of them (None without).
+        best_source: "search" or "initial": the result is never worse than the scene's
+            own design; where the search found nothing better (certified, or at the search's
+            accuracy without certification), the best design is the initial one.
+        initial_objective: the objective of the scene's own modification (the unmodified
+            pair's for a scene without one), at the search's accuracy.
+        initial_design: that modification (mm); it starts the search (first member of the
+            population, first start) where it lies within the bounds.
         history: best value after each generation/iteration.
         evaluations: objective evaluations, counted per design and load (and error sample).
         gradient_evaluations: of those, evaluations that also computed the gradient.
@@ -85,6 +91,7 @@ class OptimizationResult:
     run_dir: str | None
     certified_objective: float | None = None
     certification: Certification | None = None
+    best_source: str = "search"
 
 
 # ---------------------------------------------------------------------------- compiled steps
@@ -239,10 +246,15 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
     best, best_design = _best(method, state, space)
     certification = None
     if certify_accuracy is not None:
-        designs, values = candidates(method, state, space, certify_top)
-        certification = _certification(directory, objective, designs, values, certify_accuracy, certify_top, progress)
+        designs, values = _with_initial(*candidates(method, state, space, certify_top), initial_design, initial)
+        # one batch shape for every run: the search's candidates and the initial design
+        certification = _certification(directory, objective, designs, values, certify_accuracy, certify_top + 1,
+                                       progress)
         i = certification.best
         best_design, best = certification.designs[i], float(certification.objective[i])
+    elif np.isfinite(initial) and not initial >= best:  # the search found nothing lower
+        best_design, best = initial_design, float(initial)
+    source = "initial" if np.allclose(best_design, initial_design, rtol=0.0, atol=SAME_DESIGN_MM) else "search"
     history = [r["best_objective"] for r in records]
     if method == "gradient":
         converged = not bool(np.any(np.asarray(state.active)))
@@ -265,7 +277,22 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         run_dir=None if directory is None else str(directory.path),
         certified_objective=None if certification is None else float(certification.certified[certification.best]),
         certification=certification,
+        best_source=source,
     )
+
+
+#: designs closer than this in every parameter (mm) are the same design (a design passed
+#: through the unit cube and back differs from itself by rounding)
+SAME_DESIGN_MM = 1e-12
+
+
+def _with_initial(designs, values, initial_design, initial_value):
+    """The search's candidates (mm, best first) and the initial design last, unless it is
+    one of them already."""
+    if any(np.allclose(d, initial_design, rtol=0.0, atol=SAME_DESIGN_MM) for d in designs):
+        return designs, values
+    return (np.concatenate([designs, np.asarray(initial_design, float)[None]]),
+            np.concatenate([values, [initial_value]]))
 
 
 def _certification(directory, objective, designs, values, accuracy, top, progress) -> Certification:
@@ -290,6 +317,15 @@ def _best(method, state, space: DesignSpace) -> tuple[float, np.ndarray]:
         return float(state.best_fitness), np.asarray(space.to_design(state.best))
     i = int(np.argmin(np.asarray(state.best_value)))
     return float(state.best_value[i]), np.asarray(space.to_design(state.best[i]))
+
+
+def _starts(objective: Objective, space: DesignSpace, initial):
+    """The designs that start the search: `initial`, or by default the scene's own design
+    where it lies within the bounds (else None: a random start)."""
+    if initial is not None:
+        return initial
+    own = np.asarray(objective.scene.modification.as_vector())
+    return own[None] if space.contains(own) else None
 
 
 def _unit(space: DesignSpace, designs):
@@ -331,15 +367,20 @@ def genetic(
         progress: "auto" (a tqdm bar on a terminal, else plain lines), "bar", "lines" or
             None (quiet).
         initial: designs (mm, shape (m, 6)) placed in the first population (or used as the
-            first starts), clipped to the bounds; by default the first population is random.
+            first starts), clipped to the bounds; by default the scene's own design where it
+            lies within the bounds, the rest random.
         certify: accuracy at which the best candidates are evaluated again once the search
             is done (a preset name or an `Accuracy`; `gearjax.optimize.certification`), or None.
         certify_top: candidates certified besides the best design found (the best distinct
-            members of the final population, or the starts' best points).
+            members of the final population, or the starts' best points) and the initial
+            design.
+
+    The result is the best of the certified candidates and the scene's own design: never
+    worse than the start (`OptimizationResult.best_source` says which).
     """
     config = GAConfig() if config is None else config
     space.check_fits(objective.scene)
-    state = ga_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
+    state = ga_init(jax.random.PRNGKey(seed), config, 6, _unit(space, _starts(objective, space, initial)))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _ga_generation(objective, space, config, s)  # noqa: E731
     return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step,
@@ -366,7 +407,7 @@ def gradient_descent(
     """
     config = GradientConfig() if config is None else config
     space.check_fits(objective.scene)
-    state = gradient_init(jax.random.PRNGKey(seed), config, 6, _unit(space, initial))
+    state = gradient_init(jax.random.PRNGKey(seed), config, 6, _unit(space, _starts(objective, space, initial)))
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
     return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step,
