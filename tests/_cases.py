@@ -10,6 +10,7 @@ addendum, modification, errors, torque) is an array and varies within the batch.
 from __future__ import annotations
 
 import math
+import os
 
 import jax.numpy as jnp
 import numpy as np
@@ -25,6 +26,18 @@ PAPER_UM = np.array(TABLE2_OPTIMUM_UM)
 # DesignSpace.seed001: amounts [0.001, 0.015] m_n, relief lengths [0.1, 0.8] m_n, y6 in [0, 0.5 b]
 LOWER = np.array([0.001, 0.001, 0.1, 0.1, 0.001, 0.0])
 UPPER = np.array([0.015, 0.015, 0.8, 0.8, 0.015, 0.5])
+
+#: `GEARJAX_HARD_CASES=full` runs the hard-case study: all 1 000 random designs of the
+#: `test_hard_cases*.py` files. The suite runs the first quarter of each file's seeded
+#: stream (every group draws from its own generator, so those are the study's first designs).
+STUDY = os.environ.get("GEARJAX_HARD_CASES", "suite")
+if STUDY not in ("suite", "full"):
+    raise ValueError(f"GEARJAX_HARD_CASES must be 'suite' or 'full'; got {STUDY!r}")
+
+
+def random_count(study: int) -> int:
+    """How many of the study's `study` random designs this run draws."""
+    return study if STUDY == "full" else math.ceil(study / 4)
 
 
 def bounds_mm(module: float, face_width: float) -> tuple[np.ndarray, np.ndarray]:

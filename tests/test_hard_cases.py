@@ -41,6 +41,7 @@ from _cases import (
     forward,
     helical,
     missed_contacts,
+    random_count,
     random_involute,
     scene,
 )
@@ -50,7 +51,7 @@ from gearjax.tca._slice import COINCIDENCE_ULPS
 
 PAPER = PAPER_UM / 1000.0  # seed 001's optimum (mm)
 WINDOW = (-2, -1, 0, 1, 2)  # tooth pairs of every case and random design (`pair_window` within it)
-RANDOM = 400  # random designs (1 000 in all with the other test_hard_cases_*.py files)
+RANDOM = random_count(400)  # random designs of the study (1 000 in all with the other test_hard_cases_*.py files)
 
 
 def _cases():

@@ -18,6 +18,7 @@ from _cases import (
     failure_kinds,
     forward,
     missed_contacts,
+    random_count,
     random_curvilinear,
     scene,
 )
@@ -25,7 +26,7 @@ from _cases import (
 import gearjax as gj
 
 WINDOW = (-2, -1, 0, 1, 2)
-RANDOM = 260
+RANDOM = random_count(260)
 
 
 def _cases():

@@ -15,6 +15,7 @@ from _cases import (
     failure_kinds,
     missed_contacts,
     one_by_one,
+    random_count,
     random_double_arc,
 )
 
@@ -22,7 +23,7 @@ import gearjax as gj
 from gearjax.papers.double_arc import SEED_CASE
 
 WINDOW = (-2, -1, 0, 1, 2, 3)
-RANDOM = 40
+RANDOM = random_count(40)
 
 
 def _cases():

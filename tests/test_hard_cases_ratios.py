@@ -19,6 +19,7 @@ from _cases import (
     failure_kinds,
     helical,
     missed_contacts,
+    random_count,
     random_involute,
     scene,
 )
@@ -27,7 +28,7 @@ import gearjax as gj
 
 WINDOW = (-2, -1, 0, 1, 2)
 GROUPS = {"ratio_1_1": ((40, 40), 20261126), "ratio_1_10": ((17, 170), 20261129)}  # teeth, sampler seed
-RANDOM = 150  # random designs per group
+RANDOM = random_count(150)  # random designs per group
 
 
 @pytest.fixture(scope="module")
