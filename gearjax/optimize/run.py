@@ -254,7 +254,7 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         best_design, best = certification.designs[i], float(certification.objective[i])
     elif np.isfinite(initial) and not initial >= best:  # the search found nothing lower
         best_design, best = initial_design, float(initial)
-    source = "initial" if np.allclose(best_design, initial_design, rtol=0.0, atol=SAME_DESIGN_MM) else "search"
+    source = "initial" if _same_design(best_design, initial_design) else "search"
     history = [r["best_objective"] for r in records]
     if method == "gradient":
         converged = not bool(np.any(np.asarray(state.active)))
@@ -286,10 +286,14 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
 SAME_DESIGN_MM = 1e-12
 
 
+def _same_design(a, b) -> bool:
+    return bool(np.allclose(a, b, rtol=0.0, atol=SAME_DESIGN_MM))
+
+
 def _with_initial(designs, values, initial_design, initial_value):
     """The search's candidates (mm, best first) and the initial design last, unless it is
     one of them already."""
-    if any(np.allclose(d, initial_design, rtol=0.0, atol=SAME_DESIGN_MM) for d in designs):
+    if any(_same_design(d, initial_design) for d in designs):
         return designs, values
     return (np.concatenate([designs, np.asarray(initial_design, float)[None]]),
             np.concatenate([values, [initial_value]]))
