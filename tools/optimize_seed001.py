@@ -1,17 +1,21 @@
-"""Seed 001's modification optimisation, by the GA and by gradient descent (issue #14, item 7),
-and a robust design over a load spectrum and sampled misalignment (item 8).
+"""Seed 001's modification optimisation, by the GA and by gradient descent,
+and a robust design over a load spectrum and sampled misalignment.
 
     python tools/optimize_seed001.py [--quick] [--robust] [--accuracy default] [--population 40]
         [--generations 30] [--starts 8] [--iterations 40] [--robust-generations 10] [--out FILE]
+        [--certify reference] [--run-dir DIR]
 
 The 29/71 pair at 5000 rpm, objective F_s (energy method) at 1000 N·m (the paper's) and the
 mean over 400 / 1000 / 1600 N·m; GA 40 x 30 and projected Adam from 8 Latin-hypercube starts
 (40 iterations), both within seed 001's bounds, searched at the `default` accuracy
 (`--accuracy`; `fast` misses brief tip-edge strikes between its 16 positions per pitch and
-finds optima that do not exist at `default`). The optima,
-the standard (unmodified) pair and the paper's Table 2 optimum are then evaluated at the
-`default` accuracy over the three loads, beside the paper's Table 4. Writes the JSON results
-and the convergence figure (docs/figures/optimize_convergence.png).
+finds optima that do not exist at `default`). Each search ends by certifying its best
+candidates at `--certify` (`reference` by default) and returns the best certified one
+(`gearjax.optimize.certification`). The optima, the standard (unmodified) pair and the
+paper's Table 2 optimum are then evaluated at the search's and at the certification
+accuracy over the three loads, beside the paper's Table 4. Writes the JSON results and the
+convergence figure (docs/figures/optimize_convergence.png). With `--run-dir DIR` every
+search keeps its run directory there, and a rerun resumes where the last one stopped.
 
     python tools/optimize_seed001.py --reevaluate
 
@@ -23,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 
 import jax
@@ -60,19 +63,25 @@ def within(history, evaluations_per_step, target) -> int | None:
     return None
 
 
+def run_dir(args, case: str, method: str) -> Path | None:
+    """The run directory of one search under `--run-dir` (None without): a rerun resumes it."""
+    if args.run_dir is None:
+        return None
+    slug = "".join(c if c.isalnum() else "_" for c in case).strip("_")
+    return Path(args.run_dir) / slug / method
+
+
 def run_case(name, objective, space, args, runs):
     ga_cfg = go.GAConfig(population=args.population)
-    t = time.perf_counter()
-    ga = go.genetic(objective, space, config=ga_cfg, generations=args.generations, seed=0, progress="lines")
-    ga_time = time.perf_counter() - t
+    ga = go.genetic(objective, space, config=ga_cfg, generations=args.generations, seed=0, progress="lines",
+                    certify=args.certify, run_dir=run_dir(args, name, "ga"), resume=args.run_dir is not None)
     cfg = go.GradientConfig(starts=args.starts, iterations=args.iterations)
-    t = time.perf_counter()
-    gd = go.gradient_descent(objective, space, config=cfg, seed=0, progress="lines")
-    gd_time = time.perf_counter() - t
+    gd = go.gradient_descent(objective, space, config=cfg, seed=0, progress="lines",
+                             certify=args.certify, run_dir=run_dir(args, name, "gradient"), resume=args.run_dir is not None)
     best = min(min(ga.history), min(gd.history))
     per = objective.torques.shape[0] * objective.samples
     out = {}
-    for label, result, wall, step_evals in (("ga", ga, ga_time, args.population * per), ("gradient", gd, gd_time, args.starts * per)):
+    for label, result, step_evals in (("ga", ga, args.population * per), ("gradient", gd, args.starts * per)):
         out[label] = {
             "best_objective_N": result.best_objective,
             "certified_objective_N": result.certified_objective,
@@ -81,12 +90,100 @@ def run_case(name, objective, space, args, runs):
             "best_modification": go.design_dict(result.best_design),
             "history": result.history,
             "evaluations": result.evaluations,
-            "wall_time_s": wall,
+            "best_source": result.best_source,
+            "wall_time_s": result.wall_time_s,
             "converged": result.converged,
             "evaluations_to_1pct_of_best": within(result.history, step_evals, best),
         }
     runs[name] = out
     return ga, gd
+
+
+def stored_case(args, name: str, evaluations_per_step: dict) -> dict:
+    """The results of one case's finished searches, read from their run directories
+    (`history.jsonl`, `certification.json`) without computing anything."""
+    out = {}
+    for method in ("ga", "gradient"):
+        directory = run_dir(args, name, method)
+        lines = [json.loads(line) for line in (directory / "history.jsonl").read_text().splitlines() if line.strip()]
+        cert = go.Certification.from_dict(json.loads((directory / "certification.json").read_text()))
+        best = cert.best
+        initial = np.asarray(paper_optimum().as_vector())
+        out[method] = {
+            "best_objective_N": float(cert.objective[best]),
+            "certified_objective_N": float(cert.certified[best]),
+            "certification_accuracy": cert.accuracy,
+            "certified_candidates": cert.to_dict(),
+            "best_modification": go.design_dict(cert.designs[best]),
+            "history": [line["best_objective"] for line in lines],
+            "evaluations": lines[-1]["evaluations"],
+            "best_source": "initial" if np.allclose(cert.designs[best], initial, atol=1e-9) else "search",
+            "wall_time_s": lines[-1]["elapsed_s"],
+            "converged": None,
+        }
+    best = min(min(r["history"]) for r in out.values())
+    for method, r in out.items():
+        r["evaluations_to_1pct_of_best"] = within(r["history"], evaluations_per_step[method], best)
+    return out
+
+
+def evaluate_batched(designs: dict, accuracy: str, chunk: int = 6) -> dict:
+    """`evaluate` through one batched program (`vmap(simulate)` over `chunk` scenes)."""
+    fn = jax.jit(jax.vmap(lambda s: gj.simulate(s, throw=False)))
+    jobs = [(label, load, design) for label, design in designs.items() for load in LOADS]
+    out: dict = {label: {} for label in designs}
+    for start in range(0, len(jobs), chunk):
+        part = jobs[start:start + chunk]
+        padded = part + [part[-1]] * (chunk - len(part))
+        scenes = [go.Objective.create(scene(accuracy, load)).scene_for(np.asarray(d)) for _, load, d in padded]
+        imp = fn(gj.stack_scenes(scenes)).impact
+        regime, result = gj.enum_name(imp.regime), gj.enum_name(imp.result)
+        for k, (label, load, _) in enumerate(part):
+            out[label][f"{load:g}"] = {"force_N": float(imp.force[k]), "regime": str(regime[k]),
+                                       "velocity_mm_s": float(imp.velocity[k]), "successful": bool(result[k] == "successful")}
+    return out
+
+
+def assemble(args) -> None:
+    """`--assemble`: the JSON and figure from the finished searches in `--run-dir` and a
+    forces table at the certification accuracy; no search, no robust design."""
+    gj.enable_compilation_cache()  # a rerun loads the forces table's program
+    per_step = {"F_s at 1000 N·m": {"ga": args.population, "gradient": args.starts},
+                "mean F_s over 400/1000/1600 N·m": {"ga": args.population * len(LOADS),
+                                                    "gradient": args.starts * len(LOADS)}}
+    runs = {name: stored_case(args, name, steps) for name, steps in per_step.items()}
+    best = {name: {m: go.Certification.from_dict(r["certified_candidates"]).designs[
+        go.Certification.from_dict(r["certified_candidates"]).best] for m, r in out.items()} for name, out in runs.items()}
+    designs = {
+        "standard (unmodified)": np.array([0.0, 0.0, 1.0, 1.0, 0.0, 0.0]),
+        "paper optimum (Table 2)": np.asarray(paper_optimum().as_vector()),
+        "GA, 1000 N·m": best["F_s at 1000 N·m"]["ga"],
+        "gradient, 1000 N·m": best["F_s at 1000 N·m"]["gradient"],
+        "GA, spectrum": best["mean F_s over 400/1000/1600 N·m"]["ga"],
+        "gradient, spectrum": best["mean F_s over 400/1000/1600 N·m"]["gradient"],
+    }
+    result = {
+        "note": SEED_001_NOTE,
+        "settings": {"population": args.population, "generations": args.generations, "starts": args.starts,
+                     "iterations": args.iterations, "search_accuracy": args.accuracy,
+                     "certification_accuracy": args.certify, "speed_rpm": 5000.0,
+                     "lower_mm": [0.005, 0.005, 0.5, 0.5, 0.005, 0.0], "upper_mm": [0.075, 0.075, 4.0, 4.0, 0.075, 21.0]},
+        "runs": runs,
+        "designs_mm": {k: np.asarray(v).tolist() for k, v in designs.items()},
+        "forces": {args.certify: evaluate_batched(designs, args.certify)},
+        **({"forces_finer": {"face_slices": args.finer, "forces": evaluate_batched(
+            designs, gj.Accuracy.preset(args.certify).replace(face_slices=args.finer))}} if args.finer else {}),
+        "paper_table4_N": {f"{k:g}": {"standard": v[0], "optimum": v[1]} for k, v in TABLE4_IMPACT_FORCE.items()},
+        "paper_table2_um": TABLE2_OPTIMUM_UM,
+    }
+    Path(args.out).write_text(json.dumps(result, indent=2))
+    figure(runs, ROOT / "docs/figures/optimize_convergence.png")
+    print(json.dumps(result["forces"], indent=1))
+    for case, out in runs.items():
+        for method, r in out.items():
+            print(f"{case:36s} {method:9s} search {r['best_objective_N']:9.1f} N  certified "
+                  f"{r['certified_objective_N']:9.1f} N  evals {r['evaluations']:5d}  "
+                  f"to 1 %: {r['evaluations_to_1pct_of_best']}  {r['wall_time_s']:.0f} s")
 
 
 def evaluate(designs: dict, accuracy: str) -> dict:
@@ -114,14 +211,29 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=8)
     parser.add_argument("--iterations", type=int, default=40)
     parser.add_argument("--robust-generations", type=int, default=10)
+    parser.add_argument("--run-dir", default=None,
+                        help="keep each search's run directory here; a rerun resumes the searches it holds")
+    parser.add_argument("--certify", default="reference",
+                        help="accuracy preset of the certification and of the forces table (default: reference)")
     parser.add_argument("--reevaluate", action="store_true",
                         help="only evaluate the designs stored in --out again with the current code (no search); "
                              "updates its 'forces' table")
+    parser.add_argument("--assemble", action="store_true",
+                        help="no search: the results of the finished searches in --run-dir, and the forces "
+                             "table at --certify (pass the searches' --population, --starts, ...)")
+    parser.add_argument("--finer", type=int, default=0,
+                        help="with --assemble: also the forces table at --certify with this many face slices, "
+                             "the check of the certification accuracy")
     args = parser.parse_args()
+    if args.assemble:
+        if args.run_dir is None:
+            parser.error("--assemble needs --run-dir")
+        assemble(args)
+        return
     if args.reevaluate:
         stored = json.loads(Path(args.out).read_text())
         designs = {k: np.asarray(v) for k, v in stored["designs_mm"].items()}
-        stored["forces"] = {"fast": evaluate(designs, "fast"), "default": evaluate(designs, "default")}
+        stored["forces"] = {args.accuracy: evaluate(designs, args.accuracy), args.certify: evaluate(designs, args.certify)}
         Path(args.out).write_text(json.dumps(stored, indent=2))
         print(json.dumps(stored["forces"], indent=1))
         return
@@ -144,11 +256,12 @@ def main() -> None:
         "GA, spectrum": ga3.best_design,
         "gradient, spectrum": gd3.best_design,
     }
-    table = {"fast": evaluate(designs, "fast"), "default": evaluate(designs, "default")}
+    table = {args.accuracy: evaluate(designs, args.accuracy), args.certify: evaluate(designs, args.certify)}
     result = {
         "note": SEED_001_NOTE,
         "settings": {"population": args.population, "generations": args.generations, "starts": args.starts,
-                     "iterations": args.iterations, "search_accuracy": args.accuracy, "speed_rpm": 5000.0,
+                     "iterations": args.iterations, "search_accuracy": args.accuracy,
+                     "certification_accuracy": args.certify, "speed_rpm": 5000.0,
                      "lower_mm": np.asarray(space.lower).tolist(), "upper_mm": np.asarray(space.upper).tolist()},
         "runs": runs,
         "designs_mm": {k: np.asarray(v).tolist() for k, v in designs.items()},
@@ -161,7 +274,10 @@ def main() -> None:
         errors = go.sample_errors(8, misalignment=0.010, seed=0)
         robust_obj = go.Objective.create(base, torques_Nm=LOADS, errors=errors)
         cfg = go.GAConfig(population=args.population // 2)
-        robust = go.genetic(robust_obj, space, config=cfg, generations=args.robust_generations, seed=0, progress="lines")
+        robust = go.genetic(robust_obj, space, config=cfg, generations=args.robust_generations, seed=0, progress="lines",
+                            run_dir=run_dir(args, "robust", "ga"), resume=args.run_dir is not None,
+                            certify=args.certify)
+        certified_obj = go.Objective.create(scene(args.certify), torques_Nm=LOADS, errors=errors)
         import equinox as eqx
 
         evaluate_one = eqx.filter_jit(lambda o, d: o.batch(d))  # one program for every design
@@ -169,11 +285,13 @@ def main() -> None:
                    "paper optimum (Table 2)": designs["paper optimum (Table 2)"]}
         stats = {}
         for label, design in compare.items():
-            ev = evaluate_one(robust_obj, np.asarray(design, dtype=float)[None])
-            force = np.asarray(ev.force[0])
-            edge = np.asarray(ev.edge[0])
-            stats[label] = {"mean_force_N": float(force.mean()), "worst_force_N": float(force.max()),
-                            "edge_probability": float(edge.mean()), "design": go.design_dict(design)}
+            stats[label] = {"design": go.design_dict(design)}
+            for accuracy, obj in ((args.accuracy, robust_obj), (args.certify, certified_obj)):
+                ev = evaluate_one(obj, np.asarray(design, dtype=float)[None])
+                force = np.asarray(ev.force[0])
+                edge = np.asarray(ev.edge[0])
+                stats[label][accuracy] = {"mean_force_N": float(force.mean()), "worst_force_N": float(force.max()),
+                                          "edge_probability": float(edge.mean())}
         result["robust"] = {"samples": 8, "misalignment_tolerance_um": 10.0, "loads_Nm": LOADS,
                             "population": args.population // 2, "generations": robust.steps, "evaluations": robust.evaluations,
                             "wall_time_s": robust.wall_time_s, "comparison": stats}
