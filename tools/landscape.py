@@ -2,31 +2,32 @@
 
     python tools/landscape.py [--accuracy reference] [--points 41] [--chunk 8]
                               [--out docs/results/landscape.json] [--plot docs/figures/landscape.png]
-                              [--markdown]
+                              [--markdown] [--report]
 
-Designs: the paper optimum (Table 2) and the GA and gradient optima at 1 000 N·m of
-`docs/results/optimize_seed001.json`. Through each, the objective of the optimiser
-(F_s at 1 000 N·m and 5 000 rpm) is evaluated along each of the six parameters over seed
-001's bounds (the others held), and along the segment between every two designs, extended
-by a quarter of its length beyond each end. Every point is a full `simulate` at
-`--accuracy` (a preset name; `reference` by default, the optimiser's certification), in
-batches of `--chunk` through one compiled program.
+Designs: the certified gradient and GA optima at 1 000 N·m of `--optima`
+(`docs/results/optimize_seed001.json`, written by `tools/optimize_seed001.py`), the paper's
+optimum (Table 2) and an earlier GA optimum of the 21-slice discretisation. Through each,
+the objective of the optimiser (F_s at 1 000 N·m and 5 000 rpm) is evaluated along each of
+the six parameters over seed 001's bounds (the others held), and along the segments
+`SEGMENTS`, extended by a quarter of their length beyond each end. Every point is a full
+`simulate` at `--accuracy` (a preset name; `reference` by default, the optimiser's
+certification), in batches of `--chunk` through one compiled program.
 
-Each scan is classified where the force jumps: a step between neighbours larger than
-`JUMP` of the scan's median force and three times both neighbouring steps. A jump is
-"physical" when something discrete changes there: the regime (flank on flank / tip edge),
-the incoming tooth pair, the edge that strikes, or the strike point's place along the face
-by more than a slice spacing; otherwise it is listed as unexplained. The basin of a scan
-is the stretch around its lowest point where F_s stays within `BASIN` of it, as a fraction
-of the scanned range.
+Each scan is classified (`classify`): *switches*, the steps where something discrete
+changes (the regime, the striking edge, the incoming tooth pair, the strike point leaving or
+reaching the face end); whether the lowest point is a kink (next to a switch); *wiggles*,
+local extrema away from the lowest point and every switch; *jumps*, steps larger than
+`JUMP` of the scan's median force and three times both neighbouring steps; *spikes*, single
+points off both neighbours by more than `JUMP` of the median; and the basin, the stretch
+around the lowest point where F_s stays within `BASIN` of it, as a fraction of the range.
 
-Every finished scan is written to `--out` at once; a rerun with the same settings resumes.
+Every finished scan is written to `--out` at once; a rerun with the same settings resumes,
+and `--report` only redraws the figure and the table from the stored scans.
 """
 
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 import time
 from pathlib import Path
@@ -49,13 +50,28 @@ NAMES = ("root relief", "tip relief", "root relief length", "tip relief length",
 JUMP = 0.05
 #: the basin: within this fraction of the scan's lowest force
 BASIN = 0.05
+#: half the seed pair's face width (mm): a strike point here is at the face end
+HALF_FACE = 21.0
 
 
-def designs() -> dict[str, np.ndarray]:
-    stored = json.loads((ROOT / "docs/results/optimize_seed001.json").read_text())["designs_mm"]
-    return {"paper optimum": np.asarray(paper_optimum().as_vector()),
-            "GA, 1000 N·m": np.asarray(stored["GA, 1000 N·m"]),
-            "gradient, 1000 N·m": np.asarray(stored["gradient, 1000 N·m"])}
+#: the GA's optimum at 1 000 N·m of a search at `default` before the first contact was
+#: continuous along the face (1 343 N there, uncertified): an optimum of the discretisation
+EARLIER_GA = np.array([0.024398921672800573, 0.04673654456449089, 0.5, 0.5, 0.024453622726389186, 19.02663786347871])
+
+
+def designs(optima: Path) -> dict[str, np.ndarray]:
+    """The scanned designs: the paper's optimum, the earlier GA optimum and the certified
+    gradient and GA optima at 1 000 N·m of `optima` (`tools/optimize_seed001.py`'s JSON)."""
+    stored = json.loads(optima.read_text())["designs_mm"]
+    return {"gradient (certified)": np.asarray(stored["gradient, 1000 N·m"]),
+            "paper optimum": np.asarray(paper_optimum().as_vector()),
+            "earlier GA": EARLIER_GA,
+            "GA (certified)": np.asarray(stored["GA, 1000 N·m"])}
+
+
+#: the segments scanned between designs
+SEGMENTS = (("gradient (certified)", "GA (certified)"), ("paper optimum", "gradient (certified)"),
+            ("earlier GA", "gradient (certified)"))
 
 
 def scans(named: dict, points: int) -> dict[str, dict]:
@@ -67,7 +83,8 @@ def scans(named: dict, points: int) -> dict[str, dict]:
             ys = np.repeat(y[None], points, axis=0)
             ys[:, i] = x
             out[f"{name} / {label}"] = {"x_label": f"{label} (mm)", "x": x.tolist(), "designs_mm": ys.tolist()}
-    for (a, ya), (b, yb) in itertools.combinations(named.items(), 2):
+    for a, b in SEGMENTS:
+        ya, yb = named[a], named[b]
         t = np.linspace(-0.25, 1.25, points)
         ys = np.clip(ya[None] + t[:, None] * (yb - ya)[None], LOWER, UPPER)
         out[f"{a} -> {b}"] = {"x_label": f"t (0: {a}, 1: {b})", "x": t.tolist(), "designs_mm": ys.tolist()}
@@ -112,6 +129,31 @@ def classify(scan: dict, spacing: float) -> dict:
                 causes.append("strike point along the face")
             jumps.append({"between": [float(x[i]), float(x[i + 1])], "relative": float(s / median),
                           "cause": ", ".join(causes) or "unexplained"})
+    face_end = np.abs(np.asarray(scan["slice_z_mm"])) >= HALF_FACE - 1e-6
+    switches = []
+    for i in range(len(f) - 1):
+        what = [w for w, key in (("regime", "regime"), ("tooth pair", "pair_index"), ("edge", "kind"))
+                if scan[key][i] != scan[key][i + 1]]
+        if face_end[i] != face_end[i + 1]:
+            what.append("strike leaves the face end" if face_end[i] else "strike reaches the face end")
+        if what:
+            switches.append({"between": [float(x[i]), float(x[i + 1])], "what": ", ".join(what)})
+    # wiggles: local extrema other than the lowest point and away from every switch, each
+    # measured as its distance from the mean of its neighbours, relative to F_s there
+    near_switch = {i for sw in switches for i in range(len(x)) if x[i] in sw["between"]}
+    slope = np.diff(f)
+    wiggles = [abs(f[i] - 0.5 * (f[i - 1] + f[i + 1])) / f[i] for i in range(1, len(f) - 1)
+               if slope[i - 1] * slope[i] < 0 and i != int(np.argmin(f)) and i not in near_switch]
+    # spikes: single points off both neighbours by more than JUMP of the median, the same way
+    # (the lowest point is not one: a minimum at a kink lies below both neighbours)
+    spikes = []
+    for i in range(1, len(f) - 1):
+        left, right = f[i] - f[i - 1], f[i] - f[i + 1]
+        if i != int(np.argmin(f)) and left * right > 0 and min(abs(left), abs(right)) > JUMP * median:
+            what = [w for w, key in (("regime", "regime"), ("tooth pair", "pair_index"), ("edge", "kind"))
+                    if scan[key][i] != scan[key][i - 1] or scan[key][i] != scan[key][i + 1]]
+            spikes.append({"x": float(x[i]), "relative": float(min(abs(left), abs(right)) / median),
+                           "cause": ", ".join(what) or "unexplained"})
     low = int(np.argmin(f))
     inside = f <= (1 + BASIN) * f[low]
     lo = hi = low
@@ -119,19 +161,28 @@ def classify(scan: dict, spacing: float) -> dict:
         lo -= 1
     while hi < len(f) - 1 and inside[hi + 1]:
         hi += 1
-    return {"jumps": jumps, "lowest": {"x": float(x[low]), "force_N": float(f[low])},
-            "basin_fraction": float((x[hi] - x[lo]) / (x[-1] - x[0]))}
+    at_switch = any(min(abs(x[low] - sw["between"][0]), abs(x[low] - sw["between"][1])) < 1e-12 for sw in switches)
+    return {"jumps": jumps, "spikes": spikes, "switches": switches, "lowest": {"x": float(x[low]), "force_N": float(f[low])},
+            "lowest_at_a_switch": bool(at_switch and 0 < low < len(f) - 1),
+            "basin_fraction": float((x[hi] - x[lo]) / (x[-1] - x[0])),
+            "wiggles": len(wiggles), "largest_wiggle": float(max(wiggles, default=0.0))}
 
 
 def markdown(study: dict) -> str:
     lines = [f"Accuracy `{study['accuracy']}`, {study['points']} points per scan.", "",
-             "| scan | lowest F_s | at | basin (within 5 %) | jumps (cause) |", "|---|---:|---:|---:|---|"]
+             "| scan | F_s range (N) | lowest at | basin (within 5 %) | switches | wiggles (largest) | "
+             "jumps and spikes (cause) |", "|---|---:|---:|---:|---|---:|---|"]
     for name, scan in study["scans"].items():
         c = scan["classified"]
-        jumps = "; ".join(f"{j['between'][0]:.4g}–{j['between'][1]:.4g}: {100 * j['relative']:.0f} % ({j['cause']})"
-                          for j in c["jumps"]) or "none"
-        lines.append(f"| {name} | {c['lowest']['force_N']:.0f} N | {c['lowest']['x']:.4g} | "
-                     f"{100 * c['basin_fraction']:.0f} % | {jumps} |")
+        jumps = "; ".join([f"{j['between'][0]:.4g}–{j['between'][1]:.4g}: {100 * j['relative']:.0f} % ({j['cause']})"
+                           for j in c["jumps"]] + [f"spike at {sp['x']:.4g}: {100 * sp['relative']:.0f} % ({sp['cause']})"
+                                                   for sp in c["spikes"]]) or "none"
+        switches = "; ".join(f"{sw['between'][0]:.4g}–{sw['between'][1]:.4g}: {sw['what']}"
+                             for sw in c["switches"]) or "none"
+        at = f"{c['lowest']['x']:.4g}" + (" (a kink)" if c["lowest_at_a_switch"] else "")
+        lines.append(f"| {name} | {min(scan['force_N']):.0f}–{max(scan['force_N']):.0f} | {at} | "
+                     f"{100 * c['basin_fraction']:.0f} % | {switches} | {c['wiggles']} "
+                     f"({100 * c['largest_wiggle']:.1f} %) | {jumps} |")
     return "\n".join(lines) + "\n"
 
 
@@ -171,28 +222,40 @@ def main(argv=None) -> None:
     parser.add_argument("--chunk", type=int, default=8)
     parser.add_argument("--out", type=Path, default=ROOT / "docs/results/landscape.json")
     parser.add_argument("--plot", type=Path, default=None)
+    parser.add_argument("--optima", type=Path, default=ROOT / "docs/results/optimize_seed001.json",
+                        help="the optimiser's results whose certified 1 000 N·m optima are scanned")
     parser.add_argument("--markdown", action="store_true")
+    parser.add_argument("--report", action="store_true",
+                        help="evaluate nothing: the figure and table of the scans already in --out")
     args = parser.parse_args(argv)
     if args.points < 3 or args.chunk < 1:
         parser.error("--points must be at least 3 and --chunk at least 1")
-    planned = scans(designs(), args.points)
+    planned = scans(designs(args.optima), args.points)
     study = {"accuracy": args.accuracy, "points": args.points, "scans": {}, "jax": jax.__version__}
     if args.out.exists():
         old = json.loads(args.out.read_text())
         if old.get("accuracy") == args.accuracy and old.get("points") == args.points:
             study["scans"] = {k: v for k, v in old["scans"].items() if k in planned}
-    spacing = 42.0 / gj.Accuracy.preset(args.accuracy).face_slices
+    spacing = 2 * HALF_FACE / gj.Accuracy.preset(args.accuracy).face_slices
     fn = jax.jit(jax.vmap(lambda s: gj.simulate(s, throw=False)))
-    for name, scan in planned.items():
-        if name in study["scans"]:
+    # the certified gradient optimum first, then the segments, then the rest
+    order = sorted(planned, key=lambda n: (0 if n.startswith("gradient (certified) /") else 1 if "->" in n else 2))
+    for name in order:
+        scan = planned[name]
+        if name in study["scans"] or args.report:
             continue
         t0 = time.perf_counter()
         scan.update(evaluate(fn, np.asarray(scan["designs_mm"]), args.accuracy, args.chunk))
-        scan["classified"] = classify(scan, spacing)
         scan["wall_s"] = time.perf_counter() - t0
         study["scans"][name] = scan
-        print(f"{name}: {scan['wall_s']:.0f} s, lowest {scan['classified']['lowest']['force_N']:.0f} N, "
-              f"{len(scan['classified']['jumps'])} jumps", flush=True)
+        print(f"{name}: {scan['wall_s']:.0f} s, lowest {min(scan['force_N']):.0f} N", flush=True)
+        tmp = args.out.with_suffix(".json.tmp")
+        tmp.write_text(json.dumps(study, indent=1))
+        tmp.replace(args.out)
+    study["scans"] = {name: study["scans"][name] for name in planned if name in study["scans"]}
+    for scan in study["scans"].values():
+        scan["classified"] = classify(scan, spacing)
+    if not args.report:
         tmp = args.out.with_suffix(".json.tmp")
         tmp.write_text(json.dumps(study, indent=1))
         tmp.replace(args.out)
