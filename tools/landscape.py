@@ -152,6 +152,8 @@ def classify(scan: dict, spacing: float) -> dict:
         if i != int(np.argmin(f)) and left * right > 0 and min(abs(left), abs(right)) > JUMP * median:
             what = [w for w, key in (("regime", "regime"), ("tooth pair", "pair_index"), ("edge", "kind"))
                     if scan[key][i] != scan[key][i - 1] or scan[key][i] != scan[key][i + 1]]
+            if scan["result"][i] != "successful":
+                what.append(f"failed: {scan['result'][i]}")
             spikes.append({"x": float(x[i]), "relative": float(min(abs(left), abs(right)) / median),
                            "cause": ", ".join(what) or "unexplained"})
     low = int(np.argmin(f))
