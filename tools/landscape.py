@@ -51,7 +51,7 @@ JUMP = 0.05
 #: the basin: within this fraction of the scan's lowest force
 BASIN = 0.05
 #: half the seed pair's face width (mm): a strike point here is at the face end
-HALF_FACE = 21.0
+HALF_FACE = 0.5 * float(seed_pair().face_width)
 
 
 #: the GA's optimum at 1 000 N·m of a search at `default` before the first contact was

@@ -108,7 +108,6 @@ def stored_case(args, name: str, evaluations_per_step: dict) -> dict:
         lines = [json.loads(line) for line in (directory / "history.jsonl").read_text().splitlines() if line.strip()]
         cert = go.Certification.from_dict(json.loads((directory / "certification.json").read_text()))
         best = cert.best
-        initial = np.asarray(paper_optimum().as_vector())
         out[method] = {
             "best_objective_N": float(cert.objective[best]),
             "certified_objective_N": float(cert.certified[best]),
@@ -117,7 +116,8 @@ def stored_case(args, name: str, evaluations_per_step: dict) -> dict:
             "best_modification": go.design_dict(cert.designs[best]),
             "history": [line["best_objective"] for line in lines],
             "evaluations": lines[-1]["evaluations"],
-            "best_source": "initial" if np.allclose(cert.designs[best], initial, atol=1e-9) else "search",
+            "best_source": "initial" if np.allclose(cert.designs[best], paper_optimum().as_vector(), atol=1e-9)
+            else "search",
             "wall_time_s": lines[-1]["elapsed_s"],
             "converged": None,
         }
@@ -128,7 +128,8 @@ def stored_case(args, name: str, evaluations_per_step: dict) -> dict:
 
 
 def evaluate_batched(designs: dict, accuracy: str, chunk: int = 6) -> dict:
-    """`evaluate` through one batched program (`vmap(simulate)` over `chunk` scenes)."""
+    """F_s, v_n and regime of each design at each load (mm designs; `simulate` at
+    `accuracy`), through one batched program (`vmap(simulate)` over `chunk` scenes)."""
     fn = jax.jit(jax.vmap(lambda s: gj.simulate(s, throw=False)))
     jobs = [(label, load, design) for label, design in designs.items() for load in LOADS]
     out: dict = {label: {} for label in designs}
@@ -152,8 +153,11 @@ def assemble(args) -> None:
                 "mean F_s over 400/1000/1600 N·m": {"ga": args.population * len(LOADS),
                                                     "gradient": args.starts * len(LOADS)}}
     runs = {name: stored_case(args, name, steps) for name, steps in per_step.items()}
-    best = {name: {m: go.Certification.from_dict(r["certified_candidates"]).designs[
-        go.Certification.from_dict(r["certified_candidates"]).best] for m, r in out.items()} for name, out in runs.items()}
+    def best_design(r):
+        cert = go.Certification.from_dict(r["certified_candidates"])
+        return cert.designs[cert.best]
+
+    best = {name: {m: best_design(r) for m, r in out.items()} for name, out in runs.items()}
     designs = {
         "standard (unmodified)": np.array([0.0, 0.0, 1.0, 1.0, 0.0, 0.0]),
         "paper optimum (Table 2)": np.asarray(paper_optimum().as_vector()),
@@ -184,20 +188,6 @@ def assemble(args) -> None:
             print(f"{case:36s} {method:9s} search {r['best_objective_N']:9.1f} N  certified "
                   f"{r['certified_objective_N']:9.1f} N  evals {r['evaluations']:5d}  "
                   f"to 1 %: {r['evaluations_to_1pct_of_best']}  {r['wall_time_s']:.0f} s")
-
-
-def evaluate(designs: dict, accuracy: str) -> dict:
-    """F_s, v_n and regime of each design at each load (`simulate`)."""
-    out = {}
-    for label, design in designs.items():
-        rows = {}
-        for load in LOADS:
-            base = scene(accuracy, load)
-            result = gj.simulate(go.Objective.create(base).scene_for(design), throw=False)
-            rows[f"{load:g}"] = {"force_N": float(result.impact.force), "regime": result.impact.regime_name,
-                                 "velocity_mm_s": float(result.impact.velocity), "successful": bool(result.impact.result == gj.RESULTS.successful)}
-        out[label] = rows
-    return out
 
 
 def main() -> None:
@@ -233,7 +223,7 @@ def main() -> None:
     if args.reevaluate:
         stored = json.loads(Path(args.out).read_text())
         designs = {k: np.asarray(v) for k, v in stored["designs_mm"].items()}
-        stored["forces"] = {args.accuracy: evaluate(designs, args.accuracy), args.certify: evaluate(designs, args.certify)}
+        stored["forces"] = {args.accuracy: evaluate_batched(designs, args.accuracy), args.certify: evaluate_batched(designs, args.certify)}
         Path(args.out).write_text(json.dumps(stored, indent=2))
         print(json.dumps(stored["forces"], indent=1))
         return
@@ -256,7 +246,7 @@ def main() -> None:
         "GA, spectrum": ga3.best_design,
         "gradient, spectrum": gd3.best_design,
     }
-    table = {args.accuracy: evaluate(designs, args.accuracy), args.certify: evaluate(designs, args.certify)}
+    table = {args.accuracy: evaluate_batched(designs, args.accuracy), args.certify: evaluate_batched(designs, args.certify)}
     result = {
         "note": SEED_001_NOTE,
         "settings": {"population": args.population, "generations": args.generations, "starts": args.starts,
