@@ -49,6 +49,7 @@ keeps the values it was resolved with.
 
 import abc
 import functools
+from collections.abc import Callable
 from typing import ClassVar
 
 import equinox as eqx
@@ -297,6 +298,24 @@ class AbstractFlankPair(AbstractGearPair):
         local = local - offset * normal
         sense = 1.0 if gear == 0 else -1.0
         return self.center(gear) + rotate2(sense * slice_rotation, local)
+
+    def slice_point_tangent(
+        self,
+        gear: int,
+        u: ArrayLike,
+        z: ArrayLike,
+        slice_rotation: ArrayLike,
+        depth: Callable[[Array], Array] | None = None,
+    ) -> tuple[Float[Array, "2"], Float[Array, "2"]]:
+        """`slice_point` and its derivative $\\mathrm{d}X/\\mathrm{d}u$ (mm/mm), the material
+        depth a function `depth(u)` (mm) of the profile parameter (None: unmodified).
+
+        Here by forward-mode differentiation of `slice_point`; a family with closed forms
+        overrides it (the TCA's Newton residuals hold these tangents, so every operation here
+        is differentiated twice more in a solve)."""
+        u = as_float(u)
+        depth = (lambda t: jnp.zeros_like(t)) if depth is None else depth
+        return jax.jvp(lambda t: self.slice_point(gear, t, z, slice_rotation, depth(t)), (u,), (jnp.ones_like(u),))
 
     def tip_edge(self, gear: int, z: ArrayLike, rotation: ArrayLike = 0.0) -> Float[Array, "3"]:
         """Tip edge of the drive flank (the curve $u = u_\\text{tip}$) at axial `z` (mm)."""

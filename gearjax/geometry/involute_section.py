@@ -27,6 +27,7 @@ import math
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
@@ -325,6 +326,39 @@ class AbstractInvolutePair(AbstractFlankPair):
         """$(-\\sin\\theta, \\cos\\theta)$, defined down to the base circle."""
         theta = self._local_angle(gear, u)
         return jnp.stack([-jnp.sin(theta), jnp.cos(theta)], -1)
+
+    def _slice_frame(self, gear: int, u: Array, slice_rotation: ArrayLike):
+        """$e_r(\\psi)$, $n(\\psi) = (-\\sin\\psi, \\cos\\psi)$ (2,) at the polar angle
+        $\\psi = \\theta(u) \\pm \\Phi$ of the involute's base point turned into the slice."""
+        sense = 1.0 if gear == 0 else -1.0
+        psi = self._local_angle(gear, u) + sense * as_float(slice_rotation)
+        c, s = jnp.cos(psi), jnp.sin(psi)
+        return jnp.stack([c, s], -1), jnp.stack([-s, c], -1)
+
+    def slice_point(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
+                    depth: ArrayLike = 0.0) -> Float[Array, "2"]:
+        """$X = O + r_b e_r(\\psi) + (s - \\delta/|n_t|)\\,n(\\psi)$: the involute point
+        $r_b e_r + s\\,n$ moved by the transverse offset $\\delta/|n_t|$ along its normal."""
+        u = as_float(u)
+        offset = depth / self.transverse_normal_fraction(gear, u, z)
+        radial, normal = self._slice_frame(gear, u, slice_rotation)
+        return self.center(gear) + self.base_radius[..., gear, None] * radial + (u - offset)[..., None] * normal
+
+    def slice_point_tangent(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike, depth=None):
+        """Point and $\\mathrm{d}X/\\mathrm{d}s = ((s - o)/r_b)\\,e_r(\\psi) - o'\\,n(\\psi)$, $o(s)$
+        the transverse offset $\\delta(s)/|n_t|$ (from $\\mathrm{d}e_r/\\mathrm{d}s = -n/r_b$,
+        $\\mathrm{d}n/\\mathrm{d}s = e_r/r_b$); only $o'$ is differentiated automatically."""
+        u = as_float(u)
+        if depth is None:
+            offset, rate = jnp.zeros_like(u), jnp.zeros_like(u)
+        else:
+            offset, rate = jax.jvp(lambda t: depth(t) / self.transverse_normal_fraction(gear, t, z),
+                                   (u,), (jnp.ones_like(u),))
+        radial, normal = self._slice_frame(gear, u, slice_rotation)
+        rb = self.base_radius[..., gear, None]
+        lever = (u - offset)[..., None]
+        point = self.center(gear) + rb * radial + lever * normal
+        return point, (lever / rb) * radial - rate[..., None] * normal
 
     def placement(self, gear: int) -> Scalar:
         """Tooth 0 of each gear touches the other at the pitch point at zero rotation

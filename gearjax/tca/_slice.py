@@ -88,11 +88,18 @@ class SliceProblem(eqx.Module):
         rotation = self.pinion_rotation / self.pair.gear_ratio + offset
         return self.pair.slice_point(1, u2, self.z, rotation, self.depth(self.pair, 1, self.pair_index, u2, self.z))
 
+    def _depth(self, gear):
+        """The depth (mm) of `gear`'s flank in this slice as a function of $u$."""
+        return lambda u: self.depth(self.pair, gear, self.pair_index, u, self.z)
+
     def pinion_tangent(self, u1):
-        return jax.jvp(self.pinion_point, (u1,), (jnp.ones_like(u1),))
+        """Point and $\\mathrm{d}X_1/\\mathrm{d}u_1$ (`AbstractFlankPair.slice_point_tangent`)."""
+        return self.pair.slice_point_tangent(0, u1, self.z, self.pinion_rotation, self._depth(0))
 
     def gear_tangent(self, u2, offset):
-        return jax.jvp(lambda t: self.gear_point(t, offset), (u2,), (jnp.ones_like(u2),))
+        """Point and $\\mathrm{d}X_2/\\mathrm{d}u_2$ at gear offset `offset`."""
+        rotation = self.pinion_rotation / self.pair.gear_ratio + offset
+        return self.pair.slice_point_tangent(1, u2, self.z, rotation, self._depth(1))
 
 
 def _contact_residual(y, args):
