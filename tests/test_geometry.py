@@ -130,6 +130,30 @@ def test_closed_form_normals_match_autodiff(seed_pair):
             assert float(frac) == pytest.approx(float(seed_pair.transverse_normal_fraction(gear, s, 7.0)), rel=1e-13)
 
 
+@pytest.mark.parametrize("family", ["helical", "curvilinear"])
+def test_closed_form_slice_point_and_tangent_match_autodiff(seed_pair, family):
+    # The TCA's residual uses AbstractInvolutePair's closed forms; the generic base-class
+    # point (profile, normal and normal fraction composed) and its jvp are the reference.
+    from gearjax import CurvilinearGearPair, FlankModification
+    from gearjax.geometry._base import AbstractFlankPair
+
+    pair = seed_pair if family == "helical" else CurvilinearGearPair((20, 30), 2.0, 20.0, 20.0, 60.0)
+    mod = FlankModification(tip_relief=0.02, root_relief=0.015, tip_relief_length=1.2 * float(pair.normal_module),
+                            root_relief_length=2.0, crowning=0.01, unmodified_length=0.5 * float(pair.face_width))
+    z = 0.3 * float(pair.face_width)
+    for gear in (0, 1):
+        start, tip = pair.relief_coordinates(gear)
+        depth = lambda t: mod.depth(t, z, start, tip, pair.face_width)  # noqa: E731
+        lo, hi = (float(v) for v in pair.profile_limits(gear))
+        for s in np.linspace(lo - 1.0, hi + 0.5, 7):  # the reliefs' parabolas and beyond the tip
+            generic = lambda t: AbstractFlankPair.slice_point(pair, gear, t, z, 0.3, depth(t))  # noqa: E731
+            point, tangent = jax.jvp(generic, (jnp.asarray(s),), (jnp.asarray(1.0),))
+            closed_point, closed_tangent = pair.slice_point_tangent(gear, s, z, 0.3, depth)
+            np.testing.assert_allclose(closed_point, point, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(pair.slice_point(gear, s, z, 0.3, depth(s)), point, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(closed_tangent, tangent, rtol=0, atol=1e-14)
+
+
 def test_derived_quantities_are_differentiable(seed_pair):
     def eps(x1):
         p = InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0, profile_shift=jnp.stack([x1, 0.0]))
