@@ -6,9 +6,13 @@
     gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--chunk N] [--out DIR] [--resume]
                   [--json] [--plot] [--quiet]
 
+    gearjax --version
+
 With no file it runs the built-in default scene (seed 001's 29/71 helical pair with the
 paper's optimal modification). `--json` prints one JSON object (keys in the README). A bad
-scene file prints one line naming the field and exits with status 2. `reproduce` runs the
+scene file (a field out of range, a file that cannot be read or is not UTF-8 text) prints
+one line naming the field as `[section] key: ...` and exits with status 2; so does a bad
+argument. `reproduce` runs the
 reproductions of `gearjax.papers` (the command is presentation: it may import the papers
 package, the core may not).
 
@@ -25,7 +29,48 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import re
 import sys
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (`gearjax CMD: error: ...; see
+    gearjax CMD --help`) and exit status 2, like the scene file's."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
+#: Options whose value may start with "-" (a list with a negative number is a bad value,
+#: which `parse_list` names; argparse would take it for an option).
+_VALUE_OPTIONS = ("--torque-Nm", "--speed-rpm", "--chunk")
+_NUMBER_LIKE = re.compile(r"-[\d.]")
+
+
+def _attach_values(argv: list[str]) -> list[str]:
+    """`--torque-Nm -5,100` as `--torque-Nm=-5,100`, so that the value reaches its check."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        if argv[i] in _VALUE_OPTIONS and i + 1 < len(argv) and _NUMBER_LIKE.match(argv[i + 1]):
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(argv[i])
+            i += 1
+    return out
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    from . import __version__
+
+    try:
+        jax_version = version("jax")
+    except PackageNotFoundError:  # pragma: no cover - jax is a dependency
+        jax_version = "not installed"
+    return f"gearjax {__version__} (jax {jax_version}, Python {sys.version.split()[0]})"
 
 
 def _enable_x64() -> None:
@@ -98,6 +143,10 @@ def _run(args: argparse.Namespace) -> int:
     except SceneFileError as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
+    if "impact" not in scene.effects and float(scene.operating.speed) > 0.0:
+        notes.append(
+            "[operating] speed_rpm is used by the mesh-in impact only, which this scene does not compute; "
+            "add effects = [\"impact\"] to [analysis] (with a torque) to compute it")
     from .resources import MemoryEstimateError
 
     # The summary reports every stage's result code, so a failed stage is shown, not raised.
@@ -150,7 +199,8 @@ def _sweep(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="gearjax", description="Differentiable gear contact engine.")
+    parser = _Parser(prog="gearjax", description="Differentiable gear contact engine.")
+    parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="simulate a scene (default: the built-in seed 001 scene)")
     run.add_argument("scene", nargs="?", help="TOML scene file")
@@ -186,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
             "--no-cache", action="store_true",
             help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
         )
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_attach_values(sys.argv[1:] if argv is None else list(argv)))
     _enable_x64()
     with _caches(args):
         if args.command == "run":

@@ -114,7 +114,10 @@ class Scene(eqx.Module):
         if pairs is None:
             if not is_concrete(pair):
                 raise ValueError("pairs must be given when the scene is built inside a transformation")
-            pairs = pair_window(pair, pitches)
+            try:
+                pairs = pair_window(pair, pitches)
+            except ValueError as err:
+                raise ValueError(f"[pair] {err}") from None
         self.pair = pair
         self.modification = modification
         self.gear_modification = gear_modification

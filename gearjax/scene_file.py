@@ -88,7 +88,10 @@ _ANALYSIS_KEYS = {"accuracy", "effects", "tca_method", "positions_per_pitch", "f
 
 
 def _fail(field: str, message: str) -> SceneFileError:
-    return SceneFileError(f"{field}: {message}")
+    """The error for `field` ("section.key", or "section"): `[section] key: message`, the
+    one style of every scene-file error."""
+    section, _, key = field.partition(".")
+    return SceneFileError(f"[{section}] {key}: {message}" if key else f"[{section}] {message}")
 
 
 def _unknown(section: str, table: dict, allowed) -> None:
@@ -116,7 +119,8 @@ def _build(section: str, factory, **kwargs):
     except SceneFileError:
         raise
     except ValueError as err:
-        raise SceneFileError(f"[{section}] {err}") from None
+        message = str(err)  # already naming its section, or prefixed with this one
+        raise SceneFileError(message if message.startswith("[") else f"[{section}] {message}") from None
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -125,7 +129,7 @@ def scene_from_dict(data: dict) -> Scene:
         raise SceneFileError("scene: the file must be a TOML table")
     _unknown("scene", data, _SECTIONS)
     if "pair" not in data:
-        raise _fail("pair", "missing section [pair]")
+        raise _fail("pair", "missing section: every scene needs a [pair]")
     pair = _pair_from(data["pair"])
     modification = _modification_from(data, "modification")
     gear_modification = _modification_from(data, "gear_modification")
@@ -305,14 +309,22 @@ def _analysis_from(analysis: dict):
     return accuracy, tuple(effects), pitches
 
 
-def load_scene(path: str | Path) -> tuple[Scene, dict]:
-    """Read a TOML scene file; returns the scene and the parsed table."""
+def read_scene_text(path: str | Path) -> str:
+    """The text of a scene file; `SceneFileError` (one line) if it cannot be read or is not
+    UTF-8 text."""
     path = Path(path)
     try:
-        text = path.read_text()
+        return path.read_text(encoding="utf-8")
     except OSError as err:
         raise SceneFileError(f"{path}: cannot read the scene file ({err.strerror})") from None
-    return parse_scene(text, str(path))
+    except UnicodeDecodeError as err:
+        raise SceneFileError(f"{path}: not a scene file (not UTF-8 text: byte {err.object[err.start]:#04x} "
+                             f"at position {err.start})") from None
+
+
+def load_scene(path: str | Path) -> tuple[Scene, dict]:
+    """Read a TOML scene file; returns the scene and the parsed table."""
+    return parse_scene(read_scene_text(path), str(path))
 
 
 def parse_scene(text: str, name: str = "scene") -> tuple[Scene, dict]:

@@ -75,7 +75,7 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
             raise ListError("--resume: give the run directory with --out")
         scene, _ = default_scene() if scene_path is None else load_scene(scene_path)
         if "impact" not in scene.effects:
-            raise SceneFileError("analysis.effects: the sweep needs effects = [\"impact\"] in the scene file")
+            raise SceneFileError("[analysis] effects: the sweep needs effects = [\"impact\"] in the scene file")
     except (ListError, SceneFileError) as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2

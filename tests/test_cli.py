@@ -98,12 +98,17 @@ face_width = 20.0
 tip_relief_um = 10.0
 tip_relief_length = 10.0
 
+[operating]
+speed_rpm = 3000.0
+
 [analysis]
 accuracy = "fast"
 """
     )
     assert main(["run", str(path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
+    # a speed without the impact stage is not silently ignored
+    assert any("speed_rpm" in note and 'effects = ["impact"]' in note for note in out["notes"]), out.get("notes")
     assert out["geometry"]["helix_angle_deg"] == 0.0
     assert out["geometry"]["overlap_ratio"] == 0.0
     # pinion tip relief on a spur pair: a TE dip no deeper than the plane-of-action theory
@@ -117,24 +122,24 @@ accuracy = "fast"
 @pytest.mark.parametrize(
     "text, field",
     [
-        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncolour = 'red'\n", "pair.colour"),
-        ("[pair]\nteeth = [29]\nnormal_module = 5.0\n", "pair.teeth"),
-        ("[pair]\nteeth = [29, 71]\nnormal_module = 'five'\n", "pair.normal_module"),
-        ("[pair]\nteeth = [29, 71]\n", "pair.normal_module"),
-        ("[operating]\ntorque_Nm = 100\n", "pair"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncolour = 'red'\n", "[pair] colour:"),
+        ("[pair]\nteeth = [29]\nnormal_module = 5.0\n", "[pair] teeth:"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 'five'\n", "[pair] normal_module:"),
+        ("[pair]\nteeth = [29, 71]\n", "[pair] normal_module:"),
+        ("[operating]\ntorque_Nm = 100\n", "[pair] missing section"),
         ("[pair]\nteeth = [3, 71]\nnormal_module = 5.0\n", "teeth[0]"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[modification]\ntip_relief_um = -2\n", "tip_relief (y2)"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[operating]\ntorque_Nm = -3\n", "torque_Nm"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\naccuracy = 'best'\n", "accuracy preset"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ncenter_distance = 261.0\n", "center_distance"),
         ("[pair\nteeth = 1\n", "not valid TOML"),
-        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[impact]\ninertia_kg_m2 = [1.0]\n", "impact.inertia_kg_m2"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[impact]\ninertia_kg_m2 = [1.0]\n", "[impact] inertia_kg_m2:"),
         ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[analysis]\neffects = ['impact']\n", "needs a torque"),
-        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[ltca]\ncompliance = 'fem'\n", "ltca.compliance"),
-        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ntooth_trace_radius = 30.0\n", "pair.tooth_trace_radius"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\n[ltca]\ncompliance = 'fem'\n", "[ltca] compliance:"),
+        ("[pair]\nteeth = [29, 71]\nnormal_module = 5.0\ntooth_trace_radius = 30.0\n", "[pair] tooth_trace_radius:"),
         ("[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nface_width = 20.0\ntooth_trace_radius = 9.0\n", "tooth_trace_radius"),
-        ("[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nhelix_angle_deg = 10.0\n", "pair.helix_angle_deg"),
-        ("[pair]\nfamily = 'cycloid'\nteeth = [20, 30]\nnormal_module = 2.0\n", "pair.family"),
+        ("[pair]\nfamily = 'curvilinear'\nteeth = [20, 30]\nnormal_module = 2.0\nhelix_angle_deg = 10.0\n", "[pair] helix_angle_deg:"),
+        ("[pair]\nfamily = 'cycloid'\nteeth = [20, 30]\nnormal_module = 2.0\n", "[pair] family:"),
     ],
 )
 def test_bad_scene_files_give_one_line_and_status_2(tmp_path, capsys, text, field):
@@ -145,6 +150,58 @@ def test_bad_scene_files_give_one_line_and_status_2(tmp_path, capsys, text, fiel
     assert "\n" not in err
     assert err.startswith("gearjax: error:")
     assert field in err
+
+
+def _one_error_line(capsys) -> str:
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert "\n" not in err and err.startswith("gearjax"), err
+    return err
+
+
+@pytest.mark.parametrize(
+    "content, match",
+    [
+        (bytes(range(128, 256)), "not UTF-8 text"),
+        (b"", "[pair] missing section"),
+        (b"[pair]\nfamily = 'double_circular_arc'\nteeth = [20, 40]\nnormal_module = 3.0\nhelix_angle_deg = 15.0\n"
+         b"face_width = 9223372036854775808\n", "[pair] face_width: the contact spans"),
+        (b"[pair]\nteeth = [20, 40]\nnormal_module = 3.0\nhelix_angle_deg = 15.0\nface_width = 1e308\n",
+         "[pair] face_width: the contact spans"),
+    ],
+    ids=["binary", "empty", "dca-huge-face", "helical-huge-face"],
+)
+def test_unreadable_or_absurd_scene_files_give_one_line_and_status_2(tmp_path, capsys, content, match):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(content)
+    for command in (["run", str(path)], ["optimize", str(path), "--out", str(tmp_path / "run")]):
+        assert main(command) == 2
+        assert match in _one_error_line(capsys)
+
+
+def test_a_directory_as_scene_is_a_clean_error(tmp_path, capsys):
+    assert main(["run", str(tmp_path)]) == 2
+    assert "cannot read the scene file" in _one_error_line(capsys)
+
+
+@pytest.mark.parametrize("argv", [[], ["run", "--frob"], ["walk"], ["sweep", "--speed-rpm", "100"]])
+def test_bad_arguments_give_one_line_and_status_2(capsys, argv):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    assert "; see gearjax" in _one_error_line(capsys)
+
+
+def test_version_names_gearjax_and_jax(capsys):
+    import jax
+
+    import gearjax
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"gearjax {gearjax.__version__} (jax {jax.__version__}"), out
 
 
 def test_missing_file_is_a_clean_error(capsys):

@@ -379,15 +379,15 @@ def _scene_file(tmp_path, optimize: str) -> str:
 @pytest.mark.parametrize(
     "optimize, field",
     [
-        ("method = 'annealing'\n", "optimize.method"),
-        ("objective = 'noise'\n", "optimize.objective"),
-        ("loads_Nm = []\n", "optimize.loads_Nm"),
-        ("loads_Nm = [-400.0]\n", "optimize.loads_Nm"),
+        ("method = 'annealing'\n", "[optimize] method:"),
+        ("objective = 'noise'\n", "[optimize] objective:"),
+        ("loads_Nm = []\n", "[optimize] loads_Nm:"),
+        ("loads_Nm = [-400.0]\n", "[optimize] loads_Nm:"),
         ("loads_Nm = [400.0, 1000.0]\nload_weights = [1.0]\n", "weight"),
-        ("population = 1\n", "optimize.population"),
+        ("population = 1\n", "[optimize] population:"),
         ("tip_relief_um = [50.0, 10.0]\n", "tip_relief"),
-        ("colour = 'red'\n", "optimize.colour"),
-        ("certify = 'exact'\n", "optimize.certify"),
+        ("colour = 'red'\n", "[optimize] colour:"),
+        ("certify = 'exact'\n", "[optimize] certify:"),
     ],
 )
 def test_cli_rejects_a_bad_optimize_section(tmp_path, capsys, optimize, field):

@@ -224,6 +224,8 @@ def test_sweeps_reject_bad_devices_before_computing(seed_pair, no_compute, devic
         ("--torque-Nm", "", "--torque-Nm: empty list"),
         ("--torque-Nm", "100,abc", "--torque-Nm: 'abc' is not a number"),
         ("--torque-Nm", "100,-5", "--torque-Nm: values must be finite numbers >= 0; got -5"),
+        ("--torque-Nm", "-5,abc", "--torque-Nm: values must be finite numbers >= 0; got -5"),  # not an option
+        ("--speed-rpm", "-1000:5000:3", "--speed-rpm: values must be finite numbers >= 0; got -1000"),
         ("--torque-Nm", "nan", "--torque-Nm: values must be finite numbers >= 0; got nan"),
         ("--speed-rpm", "1000:5000:0", "--speed-rpm: the count of start:stop:count must be an integer >= 1; got 0"),
         ("--speed-rpm", "5000:1000:3", "--speed-rpm: the range stop 1000 is below its start 5000"),

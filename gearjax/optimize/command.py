@@ -16,10 +16,10 @@ from .space import design_dict
 
 
 def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool) -> int:
-    from ..scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene
+    from ..scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene, read_scene_text
 
     try:
-        text = DEFAULT_SCENE_TOML if scene_path is None else _read(scene_path)
+        text = DEFAULT_SCENE_TOML if scene_path is None else read_scene_text(scene_path)
         scene, data = parse_scene(text, "default scene" if scene_path is None else scene_path)
         settings = OptimizeSettings.from_dict(data.get("optimize", {}))
         if method is not None:
@@ -82,13 +82,6 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
     return 0
 
 
-def _read(path: str) -> str:
-    from ..scene_file import SceneFileError
-
-    try:
-        return Path(path).read_text()
-    except OSError as err:
-        raise SceneFileError(f"{path}: cannot read the scene file ({err.strerror})") from None
 
 
 def summary(o: dict) -> str:

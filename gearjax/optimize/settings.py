@@ -56,11 +56,11 @@ _KEYS = {
 
 
 class SettingsError(ValueError):
-    """A bad `[optimize]` section; the message names the field as `optimize.key`."""
+    """A bad `[optimize]` section; the message names the field as `[optimize] key`."""
 
 
 def _fail(key: str, message: str) -> SettingsError:
-    return SettingsError(f"optimize.{key}: {message}")
+    return SettingsError(f"[optimize] {key}: {message}")
 
 
 def _number(key: str, value: Any, low: float | None = None, integer: bool = False) -> float:

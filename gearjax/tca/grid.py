@@ -32,6 +32,11 @@ def face_slices(pair: AbstractGearPair, accuracy: Accuracy) -> tuple[Array, Arra
     return z, width
 
 
+#: Most tooth pairs a TCA follows at once (`pair_window`, margins included): every pair is a
+#: column of every contact array and of the compiled program.
+MAX_PAIRS = 32
+
+
 def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tuple[int, ...]:
     """Tooth pairs that can touch during the cycle (static; needs concrete geometry).
 
@@ -60,6 +65,10 @@ def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tu
     leads = np.asarray(jax.vmap(lambda z: pair.lead_rotation(0, z))(as_float(np.linspace(-b / 2, b / 2, 41))))
     p = 2 * math.pi / pair.teeth[0]
     phi_lo, phi_hi = -0.5 * pitches * p, 0.5 * pitches * p
-    k_lo = math.ceil((phi_lo + leads.min() - angle_hi) / p) - margin
-    k_hi = math.floor((phi_hi + leads.max() - angle_lo) / p) + margin
-    return tuple(range(k_lo, k_hi + 1))
+    lo, hi = (phi_lo + leads.min() - angle_hi) / p, (phi_hi + leads.max() - angle_lo) / p
+    if not (math.isfinite(lo) and math.isfinite(hi) and hi - lo < MAX_PAIRS - 2 * margin):
+        raise ValueError(
+            f"face_width: the contact spans {hi - lo:.4g} tooth pairs along the face (face width "
+            f"{b:.6g} mm and its lead); at most {MAX_PAIRS - 2 * margin} are analysed: reduce face_width "
+            f"or the helix angle")
+    return tuple(range(math.ceil(lo) - margin, math.floor(hi) + margin + 1))
