@@ -135,44 +135,75 @@ def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None 
     return out
 
 
+#: The families and compliance models in an engineer's words (`summary`).
+FAMILY_WORDS = {
+    "InvoluteGearPair": "involute helical gear pair",
+    "CurvilinearGearPair": "involute curvilinear-tooth gear pair",
+    "DoubleArcGearPair": "double-circular-arc gear pair (GB/T 12759)",
+}
+COMPLIANCE_WORDS = {
+    "SliceCompliance": "tooth compliance per face slice: bending, shear, foundation, Hertz",
+    "IsoCompliance": "ISO 6336-1 line stiffness",
+}
+#: Where a contact kind's edge strikes (`summary`).
+CONTACT_WORDS = {
+    "flank": "flank on flank", "gear_tip_edge": "the gear's tip edge on the pinion flank",
+    "pinion_tip_edge": "the pinion's tip edge on the gear flank",
+}
+
+
+def _family_words(g: dict) -> str:
+    words = FAMILY_WORDS.get(g["family"], g["family"])
+    if g["family"] == "InvoluteGearPair" and g.get("helix_angle_deg") == 0.0:
+        words = "involute spur gear pair"
+    return words
+
+
 def summary(out: dict) -> str:
-    """Readable multi-line summary of `result_dict` output."""
+    """Readable multi-line summary of `result_dict` output, in an engineer's words: units on
+    every number, a zero said to be one by construction, the sign convention of the TE."""
     g, t = out["geometry"], out["tca"]
-    lines = [f"gearjax — {g['family']} pair z = {g['teeth'][0]}/{g['teeth'][1]}"]
+    lines = [f"gearjax — {_family_words(g)}, z = {g['teeth'][0]}/{g['teeth'][1]}"]
     if "working_pressure_angle_deg" in g:
         lines += [
             f"  m_n {g['normal_module_mm']:.4g} mm, beta {g['helix_angle_deg']:.4g} deg, b {g['face_width_mm']:.4g} mm",
-            f"  centre distance      a        = {g['center_distance_mm']:.3f} mm",
-            f"  working pressure ang alpha_wt = {g['working_pressure_angle_deg']:.3f} deg",
-            f"  base radii           r_b      = {g['base_radius_mm'][0]:.3f} / {g['base_radius_mm'][1]:.3f} mm",
-            f"  transverse base pitch p_bt    = {g['transverse_base_pitch_mm']:.3f} mm",
-            f"  contact ratios       eps_a    = {g['transverse_contact_ratio']:.3f}, eps_b = {g['overlap_ratio']:.3f}",
+            f"  centre distance            a        = {g['center_distance_mm']:.3f} mm",
+            f"  working pressure angle     alpha_wt = {g['working_pressure_angle_deg']:.3f} deg",
+            f"  base radii                 r_b      = {g['base_radius_mm'][0]:.3f} / {g['base_radius_mm'][1]:.3f} mm",
+            f"  transverse base pitch      p_bt     = {g['transverse_base_pitch_mm']:.3f} mm",
+            f"  contact ratios             eps_a    = {g['transverse_contact_ratio']:.3f}, eps_b = {g['overlap_ratio']:.3f}",
         ]
+    method = "on the plane of action" if t["method"] == "plane_of_action" else "on the flank surfaces"
+    te_line = f"  TE peak-to-peak            = {t['te_peak_to_peak_urad']:.3f} µrad = {t['te_peak_to_peak_um']:.4f} µm (line of action)"
+    if abs(t["te_peak_to_peak_urad"]) < 1e-3:  # zero to the contact solves' tolerance
+        te_line += ": none, some pair touches on unmodified (conjugate) flanks at every position"
     lines += [
-        f"Unloaded TCA ({t['method']}, {t['positions']} positions, pairs {t['pairs']})",
-        f"  TE peak-to-peak      = {t['te_peak_to_peak_urad']:.3f} urad = {t['te_peak_to_peak_um']:.4f} um (line of action)",
-        f"  TE mean              = {t['te_mean_um']:.4f} um",
-        f"  edge contacts        = {t['edge_contact_positions']} of {t['positions']} positions",
+        f"Unloaded TCA ({method}, {t['positions']} positions, tooth pairs {t['pairs']})",
+        te_line,
+        f"  TE mean                    = {t['te_mean_um']:.4f} µm (negative: the gear behind its rigid position)",
+        f"  edge contacts              = {t['edge_contact_positions']} of {t['positions']} positions",
     ]
     if t["unconverged_solves"]:
         lines.append(f"  warning: {t['unconverged_solves']} contact solves did not converge (raise newton_max_steps)")
     if "ltca" in out:
         lt = out["ltca"]
         lines += [
-            f"Loaded TCA ({lt['compliance']}, {lt['torque_Nm']:.6g} N·m, normal load {lt['normal_load_N']:.6g} N)",
-            f"  LTE peak-to-peak     = {lt['lte_peak_to_peak_um']:.4f} um, mean {lt['lte_mean_um']:.3f} um",
-            f"  mean mesh stiffness  = {lt['mean_mesh_stiffness_N_per_mm_um']:.3f} N/(mm um) per face width",
-            f"  max load share       = {lt['max_load_share']:.3f}, max Hertz pressure {lt['max_pressure_MPa']:.0f} MPa",
+            f"Loaded TCA ({lt['torque_Nm']:.6g} N·m, normal load {lt['normal_load_N']:.6g} N; "
+            f"{COMPLIANCE_WORDS.get(lt['compliance'], lt['compliance'])})",
+            f"  LTE peak-to-peak           = {lt['lte_peak_to_peak_um']:.4f} µm, mean {lt['lte_mean_um']:.3f} µm "
+            "(negative: the gear behind its rigid position)",
+            f"  mean mesh stiffness        = {lt['mean_mesh_stiffness_N_per_mm_um']:.3f} N/(mm µm) per face width",
+            f"  max load share             = {lt['max_load_share']:.3f}, max Hertz pressure {lt['max_pressure_MPa']:.0f} MPa",
         ]
         if lt["result"] != "successful":
             lines.append(f"  warning: {enum_message(getattr(RESULTS, lt['result']))}")
     if "impact" in out:
         im = out["impact"]
         lines += [
-            f"Mesh-in impact ({im['regime']} contact, {im['contact_kind']})",
-            f"  impact force         F_s = {im['force_N']:.0f} N, normal velocity v_n = {im['velocity_mm_per_s']:.1f} mm/s",
-            f"  local stiffness      F = {im['stiffness_coefficient_N_per_mm_n']:.4g} delta^{im['stiffness_exponent']:.3f} (N, mm)",
-            f"  point M              pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
+            f"Mesh-in impact ({im['regime']} strike: {CONTACT_WORDS.get(im['contact_kind'], im['contact_kind'])})",
+            f"  impact force               F_s = {im['force_N']:.0f} N, normal velocity v_n = {im['velocity_mm_per_s']:.1f} mm/s",
+            f"  local stiffness            F = {im['stiffness_coefficient_N_per_mm_n']:.4g} delta^{im['stiffness_exponent']:.3f} (N, mm)",
+            f"  point M                    pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
             f"m_eq = {im['equivalent_mass_kg']:.3f} kg",
         ]
         if im["result"] != "successful":

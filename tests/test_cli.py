@@ -82,6 +82,11 @@ def test_summary_is_readable(capsys):
     assert "centre distance" in out and "281.845" in out and "TE peak-to-peak" in out
     assert "Mesh-in impact" in out and "impact force" in out
     assert "inconsistent" in out  # the paper's centre distance note
+    # in an engineer's words: no class names, whole labels, the TE's sign convention
+    assert "GearPair" not in out and "Compliance" not in out, out
+    assert "working pressure angle" in out and "involute helical gear pair" in out
+    assert out.count("negative: the gear behind its rigid position") == 2
+    assert "conjugate" in out  # the paper optimum's unloaded TE is zero: said why
 
 
 def test_scene_file_with_modification_and_spur_pair(tmp_path, capsys):
