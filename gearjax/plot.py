@@ -162,6 +162,13 @@ def regime_map(values, torques_Nm, force_N, regime, name="tip relief (um)", ax=N
                       ("pinion torque (N m)", "{:g} N m"))
 
 
+def _cell_edges(v):
+    """Edges of the cells of sorted grid values `v`: midway between neighbours, and the first
+    and last values themselves (the outer cells are half cells)."""
+    v = np.asarray(v, float)
+    return np.concatenate([v[:1], 0.5 * (v[1:] + v[:-1]), v[-1:]])
+
+
 def _force_map(x, y, force_N, regime, ax, cmap, x_axis, y_axis):
     """F[x][y] as a colour map with edge contacts crossed, or as curves when an axis has
     one value; `x_axis`, `y_axis` are (label, legend format)."""
@@ -169,10 +176,14 @@ def _force_map(x, y, force_N, regime, ax, cmap, x_axis, y_axis):
     x, y, f = np.asarray(x, float), np.asarray(y, float), np.asarray(force_N, float).reshape(np.size(x), np.size(y))
     edge = np.zeros(f.shape, bool) if regime is None else (np.asarray(regime) == "edge").reshape(f.shape)
     if x.size > 1 and y.size > 1:
-        mesh = ax.pcolormesh(x, y, f.T, shading="nearest", cmap=cmap)
+        # Cells end at the outermost computed points: nothing is drawn where nothing was computed.
+        mesh = ax.pcolormesh(_cell_edges(x), _cell_edges(y), f.T, shading="flat", cmap=cmap)
         ax.figure.colorbar(mesh, ax=ax, label="impact force F_s (N)")
         xx, yy = np.meshgrid(x, y, indexing="ij")
-        ax.plot(xx[edge], yy[edge], "x", color="c", ms=5, label="edge contact")
+        ax.plot(xx.ravel(), yy.ravel(), ".", color="0.5", ms=3, clip_on=False)
+        ax.plot(xx[edge], yy[edge], "x", color="c", ms=6, label="edge contact", clip_on=False)
+        ax.set_xlim(x.min(), x.max())
+        ax.set_ylim(y.min(), y.max())
         ax.set_xlabel(x_axis[0])
         ax.set_ylabel(y_axis[0])
         if edge.any():

@@ -90,27 +90,30 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
     if out is not None and plot:
-        report["files"] += write_plots(report, Path(out))
+        name = "built-in default scene" if scene_path is None else Path(scene_path).name
+        report["files"] += write_plots(report, Path(out), name)
     print(json.dumps({"sweep": report}, indent=2) if as_json else summary(report))
     return 0
 
 
-def write_plots(report: dict, directory: Path) -> list[str]:
+def write_plots(report: dict, directory: Path, scene_name: str = "scene") -> list[str]:
     """`sweep_force_map.png` (F_s over torque × speed, edge strikes marked) and
-    `sweep_harris.png` (LTE peak-to-peak against torque)."""
+    `sweep_harris.png` (LTE peak-to-peak against torque), each titled with `scene_name`."""
     import matplotlib
 
     matplotlib.use("Agg")
     from . import plot
 
     paths = []
-    fig = plot.impact_force_map(report["torque_Nm"], report["speed_rpm"], report["impact_force_N"],
-                                report["impact_regime"]).figure
+    ax = plot.impact_force_map(report["torque_Nm"], report["speed_rpm"], report["impact_force_N"],
+                               report["impact_regime"])
+    ax.set_title(f"{scene_name}: mesh-in impact force")
     paths.append(directory / "sweep_force_map.png")
-    fig.savefig(paths[-1], dpi=120, bbox_inches="tight")
-    fig = plot.harris_map(report["torque_Nm"], [report["lte_peak_to_peak_um"]]).figure
+    ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
+    ax = plot.harris_map(report["torque_Nm"], [report["lte_peak_to_peak_um"]])
+    ax.set_title(f"{scene_name}: loaded TE peak-to-peak")
     paths.append(directory / "sweep_harris.png")
-    fig.savefig(paths[-1], dpi=120, bbox_inches="tight")
+    ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
     return [str(p) for p in paths]
 
 

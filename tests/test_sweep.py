@@ -130,6 +130,22 @@ def test_regime_map_boundary_agrees_with_the_batched_regime_transition(design_gr
     assert np.isnan(below[2]) and np.isnan(above[2]) and not edge[2].any()
 
 
+def test_force_map_draws_cells_at_the_computed_points_only():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    from gearjax import plot
+
+    ax = plot.impact_force_map([200.0, 600.0], [2000.0, 4000.0], [[1.0, 2.0], [3.0, 4.0]],
+                               [["surface", "edge"], ["surface", "surface"]])
+    assert ax.get_xlim() == (200.0, 600.0) and ax.get_ylim() == (2000.0, 4000.0)
+    (mesh,) = ax.collections
+    corners = mesh.get_coordinates().reshape(-1, 2)
+    assert corners[:, 0].min() == 200.0 and corners[:, 0].max() == 600.0
+    assert corners[:, 1].min() == 2000.0 and corners[:, 1].max() == 4000.0
+    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(2, 2), [[1.0, 3.0], [2.0, 4.0]])
+    matplotlib.pyplot.close(ax.figure)
+
+
 def test_cli_sweep_writes_the_grid_as_json_npz_and_plots(impact_grid, tmp_path, capsys):
     """`gearjax sweep` of the same scene and grid (given as a range and as a list): the
     documented keys, [torque][speed] nesting, values equal to the API's, the arrays in
