@@ -34,10 +34,15 @@ from .geometry.modification import FlankModification
 from .impact import ImpactResult, impact_analysis
 from .ltca import AbstractCompliance, ContactModel, LTCAResult, SliceCompliance, loaded_contact_analysis
 from .tca import TCAResult, pair_window, tooth_contact_analysis
+from .tca.grid import MAX_PAIRS
 from .operating import OperatingPoint
 from .program_cache import cached_call
 from .resources import check_memory
 from .units import Material
+
+#: Most angular pitches a scene's cycle covers: each adds a tooth pair to the TCA's window,
+#: which holds at most `tca.grid.MAX_PAIRS`.
+MAX_PITCHES = MAX_PAIRS // 2
 
 
 class Scene(eqx.Module):
@@ -106,8 +111,8 @@ class Scene(eqx.Module):
         effects = _effects(pair, operating, effects)
         if isinstance(accuracy, str):
             accuracy = Accuracy.preset(accuracy)
-        if not isinstance(pitches, int) or pitches < 1:
-            raise ValueError(f"pitches must be an integer >= 1; got {pitches!r}")
+        if isinstance(pitches, bool) or not isinstance(pitches, int) or not 1 <= pitches <= MAX_PITCHES:
+            raise ValueError(f"pitches must be an integer in [1, {MAX_PITCHES}]; got {pitches!r}")
         for name, mod in (("modification", modification), ("gear_modification", gear_modification)):
             if mod is not None:
                 _check_modification_fits(pair, mod, 0 if name == "modification" else 1, name)

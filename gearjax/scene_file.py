@@ -18,7 +18,7 @@ from .geometry.double_arc import DoubleArcGearPair
 from .geometry.involute import InvoluteGearPair
 from .geometry.modification import FlankModification
 from .ltca import IsoCompliance, SliceCompliance
-from .scene import EFFECTS, OperatingPoint, Scene
+from .scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from .units import Material
 
 if sys.version_info >= (3, 11):
@@ -103,7 +103,10 @@ def _unknown(section: str, table: dict, allowed) -> None:
 def _number(section: str, key: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise _fail(f"{section}.{key}", f"must be a number; got {value!r}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an integer beyond the float range
+        raise _fail(f"{section}.{key}", f"must be a finite number; got an integer of {len(str(abs(value)))} digits") from None
 
 
 def _numbers(section: str, key: str, value: Any, n: int) -> tuple:
@@ -303,8 +306,8 @@ def _analysis_from(analysis: dict):
     if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
         raise _fail("analysis.effects", f"must be a list of strings from {EFFECTS}; got {effects!r}")
     pitches = analysis.get("pitches", 1)
-    if isinstance(pitches, bool) or not isinstance(pitches, int) or pitches < 1:
-        raise _fail("analysis.pitches", f"must be an integer >= 1; got {pitches!r}")
+    if isinstance(pitches, bool) or not isinstance(pitches, int) or not 1 <= pitches <= MAX_PITCHES:
+        raise _fail("analysis.pitches", f"must be an integer in [1, {MAX_PITCHES}]; got {pitches!r}")
 
     return accuracy, tuple(effects), pitches
 

@@ -97,7 +97,7 @@ class DoubleArcGearPair(AbstractGearPair):
             or not all(isinstance(z, int | np.integer) and z >= 10 for z in teeth)
         ):
             raise ValueError(f"teeth must be two integers >= 10 (z1, z2); got {teeth!r}")
-        check_range("normal_module", normal_module, 0.0, 100.0, low_inclusive=False, unit="mm")
+        check_range("normal_module", normal_module, 0.01, 100.0, unit="mm")
         check_range("helix_angle_deg", helix_angle_deg, 5.0, 40.0, unit="deg")
         check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
         self.teeth = (int(teeth[0]), int(teeth[1]))

@@ -98,7 +98,7 @@ def axial_meshing(normal_module: ArrayLike, helix_angle_deg: ArrayLike, face_wid
     $q'_{TA} = P_x - q_{TA}$; formula (28) is the case $\Delta b < P_x - q_{TA}$. Arguments:
     normal module (mm), helix angle (deg), face width (mm), the basic rack (multiples of $m_n$).
     """
-    check_range("normal_module", normal_module, 0.0, 100.0, low_inclusive=False, unit="mm")
+    check_range("normal_module", normal_module, 0.01, 100.0, unit="mm")
     check_range("helix_angle_deg", helix_angle_deg, 0.0, 45.0, low_inclusive=False, high_inclusive=False, unit="deg")
     check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
     m = as_float(normal_module)

@@ -68,7 +68,7 @@ def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tu
     lo, hi = (phi_lo + leads.min() - angle_hi) / p, (phi_hi + leads.max() - angle_lo) / p
     if not (math.isfinite(lo) and math.isfinite(hi) and hi - lo < MAX_PAIRS - 2 * margin):
         raise ValueError(
-            f"face_width: the contact spans {hi - lo:.4g} tooth pairs along the face (face width "
-            f"{b:.6g} mm and its lead); at most {MAX_PAIRS - 2 * margin} are analysed: reduce face_width "
-            f"or the helix angle")
+            f"face_width: over a cycle of {pitches} pitch(es) the contact spans {hi - lo:.4g} tooth pairs "
+            f"(face width {b:.6g} mm and its lead); at most {MAX_PAIRS - 2 * margin} are analysed: reduce "
+            f"face_width or the helix angle")
     return tuple(range(math.ceil(lo) - margin, math.floor(hi) + margin + 1))
