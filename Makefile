@@ -6,7 +6,7 @@ PYTHON ?=
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test bench clean
+.PHONY: demo test docs bench clean
 
 # Creates the environment, installs gearjax and runs the built-in default scene.
 demo:
@@ -18,10 +18,16 @@ test:
 	sh tools/setup_env.sh $(VENV) dev,plot $(PYTHON)
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --durations=30
 
+# Builds the documentation site into site/ (mkdocs-material, API reference from the
+# docstrings); --strict: a broken link or a docstring the reference cannot read fails it.
+docs:
+	sh tools/setup_env.sh $(VENV) docs $(PYTHON)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 # Benchmarks are not tests: they time things and write benchmarks/results/*.json.
 bench:
 	sh tools/setup_env.sh $(VENV) plot $(PYTHON)
 	$(BIN)/python benchmarks/tca.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache build dist *.egg-info
+	rm -rf $(VENV) .pytest_cache build dist site *.egg-info
