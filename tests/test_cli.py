@@ -170,9 +170,9 @@ def _one_error_line(capsys) -> str:
         (bytes(range(128, 256)), "not UTF-8 text"),
         (b"", "[pair] missing section"),
         (b"[pair]\nfamily = 'double_circular_arc'\nteeth = [20, 40]\nnormal_module = 3.0\nhelix_angle_deg = 15.0\n"
-         b"face_width = 9223372036854775808\n", "[pair] face_width: the contact spans"),
+         b"face_width = 9223372036854775808\n", "[pair] face_width: over a cycle of 1 pitch(es) the contact spans"),
         (b"[pair]\nteeth = [20, 40]\nnormal_module = 3.0\nhelix_angle_deg = 15.0\nface_width = 1e308\n",
-         "[pair] face_width: the contact spans"),
+         "[pair] face_width: over a cycle of 1 pitch(es) the contact spans"),
     ],
     ids=["binary", "empty", "dca-huge-face", "helical-huge-face"],
 )
