@@ -131,7 +131,8 @@ def test_regime_map_boundary_agrees_with_the_batched_regime_transition(design_gr
 
 
 def test_force_map_draws_cells_at_the_computed_points_only():
-    matplotlib = pytest.importorskip("matplotlib")
+    import matplotlib  # the dev extra installs it
+
     matplotlib.use("Agg")
     from gearjax import plot
 

@@ -349,7 +349,10 @@ class AbstractInvolutePair(AbstractFlankPair):
         $r_b e_r + s\\,n$ moved by the transverse offset $\\delta/|n_t|$ along its normal."""
         u = as_float(u)
         offset = depth / self.transverse_normal_fraction(gear, u, z)
-        radial, normal = self._slice_frame(gear, u, slice_rotation)
+        return self._offset_point(gear, u, offset, *self._slice_frame(gear, u, slice_rotation))
+
+    def _offset_point(self, gear: int, u: Array, offset, radial, normal) -> Float[Array, "2"]:
+        """$O + r_b e_r + (s - o)\\,n$ for the transverse offset $o$ (mm)."""
         return self.center(gear) + self.base_radius[..., gear, None] * radial + (u - offset)[..., None] * normal
 
     def slice_point_tangent(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike, depth=None):
@@ -363,10 +366,8 @@ class AbstractInvolutePair(AbstractFlankPair):
             offset, rate = jax.jvp(lambda t: depth(t) / self.transverse_normal_fraction(gear, t, z),
                                    (u,), (jnp.ones_like(u),))
         radial, normal = self._slice_frame(gear, u, slice_rotation)
-        rb = self.base_radius[..., gear, None]
-        lever = (u - offset)[..., None]
-        point = self.center(gear) + rb * radial + lever * normal
-        return point, (lever / rb) * radial - rate[..., None] * normal
+        tangent = ((u - offset) / self.base_radius[..., gear])[..., None] * radial - rate[..., None] * normal
+        return self._offset_point(gear, u, offset, radial, normal), tangent
 
     def placement(self, gear: int) -> Scalar:
         """Tooth 0 of each gear touches the other at the pitch point at zero rotation

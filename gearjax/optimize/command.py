@@ -82,8 +82,6 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
     return 0
 
 
-
-
 def summary(o: dict) -> str:
     unit = o["objective_unit"]
     lines = [

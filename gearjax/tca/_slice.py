@@ -81,16 +81,18 @@ class SliceProblem(eqx.Module):
     z: Scalar  # axial position of the slice (mm)
     pinion_rotation: Scalar  # Phi_1, lead rotation included (rad)
 
-    def pinion_point(self, u1):
-        return self.pair.slice_point(0, u1, self.z, self.pinion_rotation, self.depth(self.pair, 0, self.pair_index, u1, self.z))
-
-    def gear_point(self, u2, offset):
-        rotation = self.pinion_rotation / self.pair.gear_ratio + offset
-        return self.pair.slice_point(1, u2, self.z, rotation, self.depth(self.pair, 1, self.pair_index, u2, self.z))
-
     def _depth(self, gear):
         """The depth (mm) of `gear`'s flank in this slice as a function of $u$."""
         return lambda u: self.depth(self.pair, gear, self.pair_index, u, self.z)
+
+    def _gear_rotation(self, offset):
+        return self.pinion_rotation / self.pair.gear_ratio + offset
+
+    def pinion_point(self, u1):
+        return self.pair.slice_point(0, u1, self.z, self.pinion_rotation, self._depth(0)(u1))
+
+    def gear_point(self, u2, offset):
+        return self.pair.slice_point(1, u2, self.z, self._gear_rotation(offset), self._depth(1)(u2))
 
     def pinion_tangent(self, u1):
         """Point and $\\mathrm{d}X_1/\\mathrm{d}u_1$ (`AbstractFlankPair.slice_point_tangent`)."""
@@ -98,8 +100,7 @@ class SliceProblem(eqx.Module):
 
     def gear_tangent(self, u2, offset):
         """Point and $\\mathrm{d}X_2/\\mathrm{d}u_2$ at gear offset `offset`."""
-        rotation = self.pinion_rotation / self.pair.gear_ratio + offset
-        return self.pair.slice_point_tangent(1, u2, self.z, rotation, self._depth(1))
+        return self.pair.slice_point_tangent(1, u2, self.z, self._gear_rotation(offset), self._depth(1))
 
 
 def _contact_residual(y, args):
