@@ -33,6 +33,7 @@ from .geometry import (
     GBT12759Rack as GBT12759Rack,
     InvoluteGearPair as InvoluteGearPair,
 )
+from .designs import simulate_designs as simulate_designs
 from .geometry.depth import FlankDepth as FlankDepth
 from .geometry.errors import MeshErrors as MeshErrors
 from .geometry.modification import FlankModification as FlankModification

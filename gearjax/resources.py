@@ -72,25 +72,27 @@ def available_bytes() -> float:
     return USABLE_FRACTION * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
-def check_memory(scene, loads: int = 1, what: str = "simulate") -> None:
-    """Raise `MemoryEstimateError` if the estimate exceeds `available_bytes()`, naming the
-    knobs (face_slices, positions_per_pitch, the tooth pairs, the loads) and the largest
-    face-slice count that would fit."""
-    needed = estimate_bytes(scene, loads)
+def check_memory(scene, loads: int = 1, what: str = "simulate", batch: int = 1) -> None:
+    """Raise `MemoryEstimateError` if the estimate (times `batch` designs computed at once)
+    exceeds `available_bytes()`, naming the knobs (face_slices, positions_per_pitch, the
+    tooth pairs, the loads, the designs) and the largest face-slice count that would fit."""
+    needed = batch * estimate_bytes(scene, loads)
     limit = available_bytes()
     if needed <= limit:
         return
     acc = scene.accuracy
     fits = acc.face_slices
-    while fits > 1 and estimate_bytes(_with_slices(scene, fits), loads) > limit:
+    while fits > 1 and batch * estimate_bytes(_with_slices(scene, fits), loads) > limit:
         fits = max(1, int(fits * 0.9))
-    batch = f" for {loads} loads at once" if loads > 1 else ""
+    at_once = f" for {loads} loads at once" if loads > 1 else ""
+    at_once += f" for {batch} designs at once" if batch > 1 else ""
     raise MemoryEstimateError(
-        f"{what}: the scene's program needs an estimated {needed / 1e9:.1f} GB{batch}, more than the "
+        f"{what}: the scene's program needs an estimated {needed / 1e9:.1f} GB{at_once}, more than the "
         f"{limit / 1e9:.1f} GB it may use here: accuracy.face_slices = {acc.face_slices} (memory grows with its "
         f"square), positions_per_pitch = {acc.positions_per_pitch} x pitches = {scene.pitches}, "
         f"{len(scene.pairs)} tooth pairs. Lower face_slices (at most {fits} fit) or positions_per_pitch"
         + (", or sweep fewer loads at once (gearjax sweep --chunk)" if loads > 1 else "")
+        + (", or compute fewer designs at once (batch_size)" if batch > 1 else "")
         + "; GEARJAX_MEMORY_LIMIT_GB overrides the limit."
     )
 

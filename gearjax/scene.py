@@ -235,11 +235,14 @@ def _inertia(inertia) -> jax.Array | None:
     return inertia
 
 
-def _check_modification_fits(pair, modification, gear, name):
+def _check_modification_fits(pair, modification, gear, name, relief_coordinates=None):
+    """`FlankModification.check_fits` on every contact zone of a concrete pair;
+    `relief_coordinates(zone, gear)` computes the relief's span (default: eagerly)."""
+    if not is_concrete(pair):
+        return
     for zone in pair.contact_zones():
-        start, tip = zone.relief_coordinates(gear)
-        if is_concrete(start, tip, zone.face_width):
-            modification.check_fits(np.asarray(tip) - np.asarray(start), zone.face_width, name)
+        start, tip = zone.relief_coordinates(gear) if relief_coordinates is None else relief_coordinates(zone, gear)
+        modification.check_fits(np.asarray(tip) - np.asarray(start), zone.face_width, name)
 
 
 class SimulationResult(eqx.Module):
