@@ -8,6 +8,8 @@ from the newest Python >= 3.12; a Python 3.11 venv gets jax 0.10.2). Rows:
 * `te_batched`: unloaded TE of 100 random designs (seed 001's bounds), 64 positions per
   pitch x 64 face slices, plane of action, `jax.jit(jax.vmap(gj.simulate))` over
   `gj.stack_scenes`: the whole result is computed, as a user who reads `.tca` gets it;
+* `te_designs`: the same designs through `gj.simulate_designs(scene, modifications,
+  outputs=TE)`: the pair resolved once, only the TE returned;
 * `ltca_iso`: uniform-stiffness LTCA of the paper optimum, 32 positions x 64 loads
   (100-2 000 N·m), `gj.load_sweep`;
 * `ltca_slice`: slice LTCA (Palmgren's Hertz law), 41 slices, 32 positions, 1 000 N·m,
@@ -69,6 +71,24 @@ def te_batched(repeats):
     return {"first_call_s": first, "run_s": run, "runs_s": runs, "te_peak_to_peak_um_mean": float(np.ptp(te, axis=-1).mean() * 1e3)}
 
 
+def te_designs(repeats):
+    scene0, _ = default_scene()
+    acc = gj.Accuracy(positions_per_pitch=64, face_slices=64, tca_method="plane_of_action")
+    designs = random_designs(100, float(scene0.pair.normal_module), float(scene0.pair.face_width))
+    scene = gj.Scene(scene0.pair, accuracy=acc, pairs=scene0.pairs)
+    modifications = gj.FlankModification.from_vector(designs)
+
+    def call():
+        return gj.simulate_designs(scene, modifications, outputs=_transmission_error)
+
+    first, run, runs, te = first_and_runs(call, repeats=repeats)
+    return {"first_call_s": first, "run_s": run, "runs_s": runs, "te_peak_to_peak_um_mean": float(np.ptp(np.asarray(te), axis=-1).mean() * 1e3)}
+
+
+def _transmission_error(result):
+    return result.tca.transmission_error_line
+
+
 def load_sweep_row(compliance, slices, torques, repeats):
     scene0, _ = default_scene()
     scene = gj.Scene(scene0.pair, scene0.modification, compliance=compliance,
@@ -97,6 +117,7 @@ def cli_rows(warm_repeats=3):
 
 ROWS = {
     "te_batched": te_batched,
+    "te_designs": te_designs,
     "ltca_iso": lambda repeats: load_sweep_row(gj.IsoCompliance(), 64, np.linspace(1e5, 2e6, 64), repeats),
     "ltca_slice": lambda repeats: load_sweep_row(gj.SliceCompliance(), 41, np.asarray([1e6]), repeats),
     "cli": lambda repeats: cli_rows(),

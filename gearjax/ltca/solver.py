@@ -33,7 +33,9 @@ compliance is block diagonal over pairs, $f = \mathrm{diag}(C_1, \dots, C_K)$, e
   and the linearisation of the contact law at the current loads
   ($a F^{e} \approx a F_0^{e} + D(F - F_0)$), each block solves
   $(C_k + D_k)_{\mathcal{AA}}F_{\mathcal A} = q_{\mathcal A}\Theta - r_{\mathcal A}$, i.e.
-  $F = u + \Theta w$ from one factorisation with two right-hand sides, and the torque
+  $F = u + \Theta w$ from one Cholesky factorisation with two right-hand sides (the
+  blocks are symmetric positive definite; with identity rows for the inactive points, so
+  is the masked matrix), and the torque
   balance gives $\Theta = (T - p\cdot u)/(p\cdot w)$. The new active set is
   $\{F_i - \kappa y_i > 0\}$ ($\kappa$ the mean point stiffness), always holding the point
   with the largest $F_i - \kappa y_i$ so that zero torque is solved too ($F = 0$, $\Theta$ =
@@ -57,6 +59,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import jax.scipy.linalg
 
 from .._custom_types import Array, Bool, Float, Scalar
 from ..accuracy import floored_tolerances
@@ -185,7 +188,8 @@ def _newton_map(problem: ContactProblem, loads, rotation, active):
     masked = a[:, :, None] * a[:, None, :] * matrix + (1.0 - a)[:, :, None] * eye
     residual = slope * loads - value - problem.separation
     rhs = jnp.stack([a * residual, a * problem.gear_arm], axis=-1)
-    solved = jnp.linalg.solve(masked, rhs)
+    # the compliance blocks are symmetric positive definite, and so is `masked`
+    solved = jax.scipy.linalg.cho_solve((jnp.linalg.cholesky(masked), True), rhs)
     u, w = solved[..., 0], solved[..., 1]
     rotation = (problem.torque - jnp.sum(problem.pinion_arm * u)) / jnp.sum(problem.pinion_arm * w)
     return u + rotation * w, rotation
