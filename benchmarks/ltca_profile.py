@@ -1,0 +1,115 @@
+"""Where the slice LTCA of one load spends its time: TCA, compliance, contact solve.
+
+    python benchmarks/ltca_profile.py [--slices 41] [--positions 32] [--hertz linear] [--repeats 9]
+
+The default scene (seed 001 pair, paper optimum, plane-of-action TCA) at 1 000 N·m with
+`SliceCompliance(hertz=...)`: each stage jitted on its own, run on the previous stage's
+output, timed after a warm-up (median of `--repeats`), beside the whole loaded `simulate`.
+It also reports the active-set steps of every position (under `vmap` the loop runs to the
+largest) and the points loaded per tooth pair: the solve's cost is steps × one Cholesky
+factorisation per tooth-pair block (slices × slices) per position.
+Writes `benchmarks/results/ltca_profile.json`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import gearjax as gj  # before the first computation: its process settings
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+jax.config.update("jax_enable_x64", True)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import machine, write  # noqa: E402
+
+from gearjax.ltca import analysis as ltca_analysis  # noqa: E402
+from gearjax.ltca.solver import NO_CONTACT, ContactProblem, solve_with  # noqa: E402
+from gearjax.scene_file import default_scene  # noqa: E402
+
+
+def median_time(fn, *args, repeats):
+    out = jax.block_until_ready(fn(*args))
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(*args))
+        runs.append(time.perf_counter() - t0)
+    return statistics.median(runs), out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--slices", type=int, default=41)
+    parser.add_argument("--positions", type=int, default=32)
+    parser.add_argument("--hertz", default="linear", choices=["linear", "palmgren"])
+    parser.add_argument("--repeats", type=int, default=9)
+    args = parser.parse_args(argv)
+
+    scene0, _ = default_scene()
+    accuracy = gj.Accuracy(positions_per_pitch=args.positions, face_slices=args.slices, tca_method="plane_of_action")
+    scene = gj.Scene(scene0.pair, scene0.modification, accuracy=accuracy,
+                     compliance=gj.SliceCompliance(hertz=args.hertz), operating=gj.OperatingPoint(torque=1.0e6))
+    model = scene.contact_model
+    n_mid = args.slices
+
+    @jax.jit
+    def tca_stage(s):
+        return gj.tooth_contact_analysis(s.pair, s.depth, accuracy=s.accuracy, pairs=s.pairs)
+
+    @jax.jit
+    def compliance_stage(s, tca):
+        pair = s.pair.resolve()
+        valid, weights = ltca_analysis._loaded_slices(pair, tca, model, None)
+        points = model.compliance(pair, model.material, model.hub_radius, tca, n_mid, model.accuracy.quadrature_points,
+                                  weights)
+        separation = jnp.where(valid, tca.separation[..., :n_mid], NO_CONTACT)
+        p, q = ltca_analysis._levers(tca, n_mid, pair.center(1))
+        return points.blocks, points.nonlinear, separation, p, q
+
+    exponent = 1.0 if args.hertz == "linear" else 0.9
+
+    @jax.jit
+    def solve_stage(blocks, nonlinear, separation, p, q, torque):
+        def one(b, a, e, pa, qa):
+            return solve_with(ContactProblem(b, a, e, pa, qa, torque, exponent, False), accuracy)
+
+        return jax.vmap(one)(blocks, nonlinear, separation, p, q)
+
+    @jax.jit
+    def whole(s):
+        return gj.simulate(s).ltca.transmission_error
+
+    t_tca, tca = median_time(tca_stage, scene, repeats=args.repeats)
+    t_compliance, data = median_time(compliance_stage, scene, tca, repeats=args.repeats)
+    t_solve, solution = median_time(solve_stage, *data, jnp.asarray(1.0e6), repeats=args.repeats)
+    t_whole, _ = median_time(whole, scene, repeats=args.repeats)
+    steps = np.asarray(solution.steps)
+    loaded = np.asarray(solution.loads > 0).sum(-1)  # (pos, pair)
+    out = {
+        "machine": machine(),
+        "sizes": {"positions": args.positions, "slices": args.slices, "pairs": len(scene.pairs), "hertz": args.hertz},
+        "tca_s": t_tca, "compliance_s": t_compliance, "solve_s": t_solve, "simulate_s": t_whole,
+        "steps": steps.tolist(), "steps_max": int(steps.max()), "steps_mean": float(steps.mean()),
+        "loaded_pairs_per_position": [int(v) for v in (loaded > 0).sum(-1)],
+        "loaded_points_per_position": [int(v) for v in loaded.sum(-1)],
+        "factorisations_per_solve": int(steps.max()) * args.positions * len(scene.pairs),
+    }
+    out["seconds_per_factorisation_upper_bound"] = t_solve / out["factorisations_per_solve"]
+    for key in ("tca_s", "compliance_s", "solve_s", "simulate_s"):
+        print(f"{key}: {out[key] * 1e3:.2f} ms")
+    print(f"active-set steps per position: mean {out['steps_mean']:.2f}, max {out['steps_max']} (the batch runs the max); "
+          f"{out['factorisations_per_solve']} block factorisations of {args.slices} x {args.slices}, "
+          f"{out['seconds_per_factorisation_upper_bound'] * 1e6:.1f} us each at most; loaded pairs per position "
+          f"{min(out['loaded_pairs_per_position'])}-{max(out['loaded_pairs_per_position'])} of {len(scene.pairs)}")
+    print("wrote", write("ltca_profile", out))
+
+
+if __name__ == "__main__":
+    main()
