@@ -1,14 +1,16 @@
-"""Where the slice LTCA of one load spends its time: TCA, compliance, contact solve.
+"""Where the LTCA spends its time: TCA, compliance, contact solve.
 
-    python benchmarks/ltca_profile.py [--slices 41] [--positions 32] [--hertz linear] [--repeats 9]
+    python benchmarks/ltca_profile.py [--compliance slice|iso] [--slices 41] [--positions 32]
+                                      [--loads 1] [--hertz linear] [--repeats 9] [--name NAME]
 
-The default scene (seed 001 pair, paper optimum, plane-of-action TCA) at 1 000 N·m with
-`SliceCompliance(hertz=...)`: each stage jitted on its own, run on the previous stage's
-output, timed after a warm-up (median of `--repeats`), beside the whole loaded `simulate`.
+The default scene (seed 001 pair, paper optimum, plane-of-action TCA) with
+`SliceCompliance(hertz=...)` or `IsoCompliance()`, at `--loads` torques from 100 to
+2 000 N·m (1 000 N·m for one): each stage jitted on its own, run on the previous stage's
+output, timed after a warm-up (median of `--repeats`), beside the whole `load_sweep`.
 It also reports the active-set steps of every position (under `vmap` the loop runs to the
 largest) and the points loaded per tooth pair: the solve's cost is steps × one Cholesky
 factorisation per tooth-pair block (slices × slices) per position.
-Writes `benchmarks/results/ltca_profile.json`.
+Writes `benchmarks/results/NAME.json` (default `ltca_profile`).
 """
 
 from __future__ import annotations
@@ -49,13 +51,18 @@ def main(argv=None):
     parser.add_argument("--slices", type=int, default=41)
     parser.add_argument("--positions", type=int, default=32)
     parser.add_argument("--hertz", default="linear", choices=["linear", "palmgren"])
+    parser.add_argument("--compliance", default="slice", choices=["slice", "iso"])
+    parser.add_argument("--loads", type=int, default=1)
     parser.add_argument("--repeats", type=int, default=9)
+    parser.add_argument("--name", default="ltca_profile")
     args = parser.parse_args(argv)
+    compliance = gj.SliceCompliance(hertz=args.hertz) if args.compliance == "slice" else gj.IsoCompliance()
+    torques = jnp.asarray([1.0e6]) if args.loads == 1 else jnp.linspace(1.0e5, 2.0e6, args.loads)
 
     scene0, _ = default_scene()
     accuracy = gj.Accuracy(positions_per_pitch=args.positions, face_slices=args.slices, tca_method="plane_of_action")
     scene = gj.Scene(scene0.pair, scene0.modification, accuracy=accuracy,
-                     compliance=gj.SliceCompliance(hertz=args.hertz), operating=gj.OperatingPoint(torque=1.0e6))
+                     compliance=compliance, operating=gj.OperatingPoint(torque=1.0e6))
     model = scene.contact_model
     n_mid = args.slices
 
@@ -73,42 +80,52 @@ def main(argv=None):
         p, q = ltca_analysis._levers(tca, n_mid, pair.center(1))
         return points.blocks, points.nonlinear, separation, p, q
 
-    exponent = 1.0 if args.hertz == "linear" else 0.9
+    exponent = 1.0 if args.hertz == "linear" or args.compliance == "iso" else 0.9
+    diagonal = args.compliance == "iso"
 
     @jax.jit
-    def solve_stage(blocks, nonlinear, separation, p, q, torque):
-        def one(b, a, e, pa, qa):
-            return solve_with(ContactProblem(b, a, e, pa, qa, torque, exponent, False), accuracy)
+    def solve_stage(blocks, nonlinear, separation, p, q, torques):
+        def at(torque):
+            def one(b, a, e, pa, qa):
+                return solve_with(ContactProblem(b, a, e, pa, qa, torque, exponent, diagonal), accuracy)
 
-        return jax.vmap(one)(blocks, nonlinear, separation, p, q)
+            return jax.vmap(one)(blocks, nonlinear, separation, p, q)
+
+        return jax.vmap(at)(torques)
 
     @jax.jit
-    def whole(s):
-        return gj.simulate(s).ltca.transmission_error
+    def whole(s, torques):
+        ltca = gj.load_sweep(s, torques).ltca
+        return ltca.transmission_error, ltca.loads
 
     t_tca, tca = median_time(tca_stage, scene, repeats=args.repeats)
     t_compliance, data = median_time(compliance_stage, scene, tca, repeats=args.repeats)
-    t_solve, solution = median_time(solve_stage, *data, jnp.asarray(1.0e6), repeats=args.repeats)
-    t_whole, _ = median_time(whole, scene, repeats=args.repeats)
+    t_solve, solution = median_time(solve_stage, *data, torques, repeats=args.repeats)
+    t_whole, _ = median_time(whole, scene, torques, repeats=args.repeats)
     steps = np.asarray(solution.steps)
-    loaded = np.asarray(solution.loads > 0).sum(-1)  # (pos, pair)
+    loaded = np.asarray(solution.loads[0] > 0).sum(-1)  # first load: (pos, pair)
     out = {
         "machine": machine(),
-        "sizes": {"positions": args.positions, "slices": args.slices, "pairs": len(scene.pairs), "hertz": args.hertz},
-        "tca_s": t_tca, "compliance_s": t_compliance, "solve_s": t_solve, "simulate_s": t_whole,
+        "sizes": {"compliance": args.compliance, "positions": args.positions, "slices": args.slices,
+                  "pairs": len(scene.pairs), "loads": args.loads, "hertz": args.hertz},
+        "tca_s": t_tca, "compliance_s": t_compliance, "solve_s": t_solve, "load_sweep_s": t_whole,
         "steps": steps.tolist(), "steps_max": int(steps.max()), "steps_mean": float(steps.mean()),
         "loaded_pairs_per_position": [int(v) for v in (loaded > 0).sum(-1)],
         "loaded_points_per_position": [int(v) for v in loaded.sum(-1)],
-        "factorisations_per_solve": int(steps.max()) * args.positions * len(scene.pairs),
+        "factorisations_per_solve": int(steps.max()) * args.positions * len(scene.pairs) * args.loads,
     }
-    out["seconds_per_factorisation_upper_bound"] = t_solve / out["factorisations_per_solve"]
-    for key in ("tca_s", "compliance_s", "solve_s", "simulate_s"):
+    for key in ("tca_s", "compliance_s", "solve_s", "load_sweep_s"):
         print(f"{key}: {out[key] * 1e3:.2f} ms")
+    if out["steps_max"] == 0:  # the diagonal model's exact solver: no active-set steps
+        print("exact diagonal solver: one sort per position, no factorisation")
+        print("wrote", write(args.name, out))
+        return
+    out["seconds_per_factorisation_upper_bound"] = t_solve / out["factorisations_per_solve"]
     print(f"active-set steps per position: mean {out['steps_mean']:.2f}, max {out['steps_max']} (the batch runs the max); "
           f"{out['factorisations_per_solve']} block factorisations of {args.slices} x {args.slices}, "
           f"{out['seconds_per_factorisation_upper_bound'] * 1e6:.1f} us each at most; loaded pairs per position "
           f"{min(out['loaded_pairs_per_position'])}-{max(out['loaded_pairs_per_position'])} of {len(scene.pairs)}")
-    print("wrote", write("ltca_profile", out))
+    print("wrote", write(args.name, out))
 
 
 if __name__ == "__main__":
