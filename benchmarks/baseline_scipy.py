@@ -1,7 +1,7 @@
 """Plain NumPy/SciPy baselines of the involute problems gearjax solves, timed in one process.
 
     python benchmarks/baseline_scipy.py [--repeats 5] [--quick] [--growth]
-                                        [--problems tca ltca_iso ltca_slice]
+                                        [--problems tca ltca_iso ltca_slice ltca_palmgren]
 
 The scene is the built-in default one (`gearjax.scene_file.default_scene()`: seed 001's
 29/71 helical pair with the paper's optimal modification); every problem uses the
@@ -31,6 +31,11 @@ anything is reported (an `AssertionError` otherwise):
    $y = CF + e - q\\Theta \\ge 0$, $F \\ge 0$, $F\\cdot y = 0$, $\\sum pF = T$
    (`scipy.linalg.solve` of the bordered system of the active set; one pivot at a time,
    warm-started from the previous torque, or from the previous position for its first).
+
+4. `ltca_palmgren`: the same with Palmgren's contact law (`SliceCompliance()`, the
+   default): $y = CF + aF^{0.9} + e - q\Theta$, a nonlinear complementarity problem.
+   Baseline: the same pivots, Newton's method on the bordered system of each active set,
+   warm-started from the previous solve's loads.
 
 The baselines' inputs (separations $e_i$, compliances $C$ or $c_i$, arms $p_i$, $q_i$) are
 taken from gearjax's TCA and compliance model as NumPy arrays once, outside the timed
@@ -100,6 +105,7 @@ TOLERANCES = {
     "tca": {"rtol": 0.0, "atol_um": 1e-9},
     "ltca_iso": {"rtol": 1e-6, "atol_um": 1e-6},
     "ltca_slice": {"rtol": 1e-6, "atol_um": 1e-6},
+    "ltca_palmgren": {"rtol": 1e-6, "atol_um": 1e-6},
 }
 
 
@@ -273,6 +279,8 @@ class ContactInputs(NamedTuple):
     pinion_arm: list  # per position: p_i (mm)
     gear_arm: list  # per position: q_i (mm)
     shape: tuple  # (pos, pair, slice)
+    nonlinear: list  # per position: a_i of the approach a_i F_i^e (mm/N^e; zeros for a linear law)
+    exponent: float  # e (1 for a linear law)
 
 
 def contact_inputs(scene: gj.Scene, tca) -> ContactInputs:
@@ -292,9 +300,7 @@ def contact_inputs(scene: gj.Scene, tca) -> ContactInputs:
         return points.matrix, points.nonlinear, points.exponent
 
     matrix, nonlinear, exponent = matrices(scene.pair.resolve(), tca)
-    if exponent != 1.0 or np.any(np.asarray(nonlinear) != 0):
-        raise ValueError("the baselines solve linear contact laws only (IsoCompliance, SliceCompliance(hertz='linear'))")
-    matrix = np.asarray(matrix)
+    matrix, nonlinear = np.asarray(matrix), np.asarray(nonlinear)
     x = np.asarray(tca.pinion_point)[..., :n_mid, :]
     n = np.asarray(tca.normal)[..., :n_mid, :]
     # moment arms: p = (x x n)_z, q = -((x - O2) x n)_z
@@ -302,7 +308,7 @@ def contact_inputs(scene: gj.Scene, tca) -> ContactInputs:
     q = -((x[..., 0] - np.asarray(scene.pair.center_distance)) * n[..., 1] - x[..., 1] * n[..., 0])
     e = np.asarray(tca.separation)[..., :n_mid]
     n_pos = valid.shape[0]
-    out = {key: [] for key in ("index", "separation", "compliance", "pinion_arm", "gear_arm")}
+    out = {key: [] for key in ("index", "separation", "compliance", "pinion_arm", "gear_arm", "nonlinear")}
     for i in range(n_pos):
         idx = np.flatnonzero(valid[i].ravel())
         out["index"].append(idx)
@@ -310,7 +316,8 @@ def contact_inputs(scene: gj.Scene, tca) -> ContactInputs:
         out["compliance"].append(np.ascontiguousarray(matrix[i][np.ix_(idx, idx)]))
         out["pinion_arm"].append(p[i].ravel()[idx])
         out["gear_arm"].append(q[i].ravel()[idx])
-    return ContactInputs(te=np.asarray(tca.transmission_error), shape=valid.shape, **out)
+        out["nonlinear"].append(nonlinear[i].ravel()[idx])
+    return ContactInputs(te=np.asarray(tca.transmission_error), shape=valid.shape, exponent=float(exponent), **out)
 
 
 # --------------------------------------------------------------------------- 2. iso LTCA
@@ -375,10 +382,91 @@ def lcp_active_set(C, e, p, q, torque, active, max_pivots):
     raise RuntimeError(f"active-set LCP solve did not converge in {max_pivots} pivots")
 
 
+def ncp_active_set(C, a, exponent, e, p, q, torque, active, start, max_pivots):
+    """Solution of the nonlinear complementarity problem $y = CF + aF^{e} + e_0 - q\Theta
+    \ge 0$, $F \ge 0$, $F\cdot y = 0$, $p\cdot F = T$ (Palmgren's law, $e$ = 0.9): on the
+    active set, Newton's method on the bordered system (loads kept positive: no load loses
+    more than 90 % in a step), then the same pivots as `lcp_active_set`: drop a point whose load tends to zero
+    from above (below 1e-9 of the mean load), add the most violated gap. `start`: loads to
+    start from (the previous solve's). Returns (F, Θ, active set, pivots, Newton steps)."""
+    active = active.copy()
+    gap_tol = 1e-12  # mm
+    newton = 0
+    theta = 0.0
+    for pivots in range(max_pivots):
+        if not active.any():
+            active[np.argmin(e / q)] = True
+        idx = np.flatnonzero(active)
+        m = idx.size
+        Ca, aa, ea, pa, qa = C[np.ix_(idx, idx)], a[idx], e[idx], p[idx], q[idx]
+        mean = torque / np.sum(pa)  # the mean load of the active points
+        F = np.where(start[idx] > 0, start[idx], torque / np.sum(pa))
+        theta = np.max((Ca @ F + aa * F**exponent + ea) / qa)
+        for _ in range(100):
+            newton += 1
+            r = np.concatenate([Ca @ F + aa * F**exponent + ea - qa * theta, [pa @ F - torque]])
+            J = np.empty((m + 1, m + 1))
+            J[:m, :m] = Ca + np.diag(exponent * aa * F ** (exponent - 1.0))
+            J[:m, m] = -qa
+            J[m, :m] = pa
+            J[m, m] = 0.0
+            dx = scipy.linalg.solve(J, -r, check_finite=False)
+            # fraction to the boundary: no load loses more than 90 % in one step
+            falling = dx[:m] < 0
+            step = min(1.0, 0.9 * np.min(F[falling] / -dx[:m][falling])) if falling.any() else 1.0
+            F, theta = F + step * dx[:m], theta + step * dx[m]
+            if step == 1.0 and np.max(np.abs(dx[:m])) <= 1e-13 * np.max(F):
+                break
+            if np.min(F) < 1e-9 * mean:  # a point leaving contact: drop it below
+                break
+        worst = np.argmin(F)
+        if F[worst] < 1e-9 * mean and m > 1:
+            active[idx[worst]] = False
+            start = start.copy()
+            start[idx] = F
+            continue
+        full = np.zeros_like(e)
+        full[idx] = F
+        gaps = C @ full + a * full**exponent + e - q * theta
+        gaps[active] = np.inf
+        worst = np.argmin(gaps)
+        if gaps[worst] < -gap_tol:
+            active[worst] = True
+            start = full
+            continue
+        return full, theta, active, pivots, newton
+    raise RuntimeError(f"active-set NCP solve did not converge in {max_pivots} pivots")
+
+
+def palmgren_numpy(data: ContactInputs, torques: np.ndarray):
+    """Θ (rad), (load, pos), and the number of pivots of the Newton active-set solves;
+    torques ascending. Warm start: the previous torque's active set and loads (the previous
+    position's at the first torque)."""
+    rotation = np.empty((len(torques), len(data.te)))
+    pivots = 0
+    size = int(np.prod(data.shape[1:]))
+    first_active, first_loads = np.zeros(size, dtype=bool), np.zeros(size)
+    for i in range(len(data.te)):
+        C, a, e, p, q = (data.compliance[i], data.nonlinear[i], data.separation[i], data.pinion_arm[i],
+                         data.gear_arm[i])
+        index = data.index[i]
+        active, loads = first_active[index], first_loads[index]
+        for j, torque in enumerate(torques):
+            loads, rotation[j, i], active, used, _ = ncp_active_set(C, a, data.exponent, e, p, q, torque, active, loads,
+                                                                    20 * e.size + 50)
+            pivots += used
+            if j == 0:
+                first_active, first_loads = np.zeros(size, dtype=bool), np.zeros(size)
+                first_active[index], first_loads[index] = active, loads
+    return rotation, pivots
+
+
 def slice_numpy(data: ContactInputs, torques: np.ndarray):
     """Θ (rad), (load, pos), and the number of pivots of the dense active-set solves; torques
     ascending. Warm start: the previous torque's active set (the previous position's at
     the first torque)."""
+    if data.exponent != 1.0:
+        raise ValueError("slice_numpy solves the linear contact law; palmgren_numpy the nonlinear one")
     rotation = np.empty((len(torques), len(data.te)))
     pivots = 0
     first = np.zeros(int(np.prod(data.shape[1:])), dtype=bool)  # over (pair x slice)
@@ -534,28 +622,31 @@ def run_iso(sizes, repeats, out):
                 compile_s, run_s, runs, "gj.load_sweep", stats)
 
 
-def slice_scene(scene0, positions_per_pitch, slices):
+def slice_scene(scene0, positions_per_pitch, slices, hertz="linear"):
     return loaded_scene(scene0.pair, scene0.modification, accuracy(positions_per_pitch, slices),
-                        gj.SliceCompliance(hertz="linear"))
+                        gj.SliceCompliance(hertz=hertz))
 
 
-def run_slice(sizes, loads, repeats, out, key="ltca_slice", label_prefix="LTCA slice (linear Hertz)"):
+def run_slice(sizes, loads, repeats, out, key="ltca_slice", label_prefix="LTCA slice (linear Hertz)", hertz="linear"):
     scene0 = base_scene()
     geo = involute_constants(scene0.pair)
-    scene = slice_scene(scene0, sizes["positions"], sizes["slices"])
+    scene = slice_scene(scene0, sizes["positions"], sizes["slices"], hertz)
     torques = np.linspace(*TORQUE_RANGE, loads) if loads > 1 else np.asarray([DESIGN_TORQUE])
     data = _loaded_inputs(scene)
     compile_s, run_s, runs, (lte_gj, _) = time_compiled_output(_load_sweep_fn(), scene, jax.numpy.asarray(torques),
                                                                repeats=repeats)
-    base_s, base_runs, (rotation, pivots) = time_host(slice_numpy, data, torques, repeats=repeats)
-    stats = check("ltca_slice", data.te[None, :] - rotation, np.asarray(lte_gj), geo.base_radius[1])
+    solver = slice_numpy if hertz == "linear" else palmgren_numpy
+    base_s, base_runs, (rotation, pivots) = time_host(solver, data, torques, repeats=repeats)
+    stats = check("ltca_slice" if hertz == "linear" else "ltca_palmgren", data.te[None, :] - rotation,
+                  np.asarray(lte_gj), geo.base_radius[1])
     points = len(scene.pairs) * sizes["slices"]
     label = f"{label_prefix}: {sizes['positions']} positions x {loads} loads, {points} points"
     contact_points = [len(i) for i in data.index]
     sizes = {**sizes, "loads": loads, "points": points, "baseline_pivots": pivots,
              "points_on_flanks": [min(contact_points), max(contact_points)]}
-    return _row(out, key, label, sizes, base_s, base_runs, "dense active set (scipy.linalg.solve) per position and load",
-                compile_s, run_s, runs, "gj.load_sweep", stats)
+    method = ("dense active set (scipy.linalg.solve) per position and load" if hertz == "linear" else
+              "dense active set with Newton on each set (scipy.linalg.solve) per position and load")
+    return _row(out, key, label, sizes, base_s, base_runs, method, compile_s, run_s, runs, "gj.load_sweep", stats)
 
 
 def _row(out, key, label, sizes, base_s, base_runs, base_method, compile_s, run_s, runs, gj_method, stats):
@@ -595,8 +686,8 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5, help="timed runs per side (median reported)")
     parser.add_argument("--quick", action="store_true", help="small smoke sizes (not a measurement)")
     parser.add_argument("--growth", action="store_true", help="also the slice problem's cost against points")
-    parser.add_argument("--problems", nargs="*", default=["tca", "ltca_iso", "ltca_slice"],
-                        choices=["tca", "ltca_iso", "ltca_slice"])
+    parser.add_argument("--problems", nargs="*", default=["tca", "ltca_iso", "ltca_slice", "ltca_palmgren"],
+                        choices=["tca", "ltca_iso", "ltca_slice", "ltca_palmgren"])
     parser.add_argument("--name", default=None, help="results file benchmarks/results/NAME.json "
                         "(default baseline_scipy, or baseline_scipy_quick with --quick)")
     args = parser.parse_args(argv)
@@ -610,7 +701,8 @@ def main(argv=None):
         "torques_Nmm": {"sweeps": list(TORQUE_RANGE), "single": DESIGN_TORQUE},
         "tolerances": TOLERANCES,
         "notes": [
-            "ltca_slice and growth use SliceCompliance(hertz='linear') on both sides (an LCP).",
+            "ltca_slice and growth use SliceCompliance(hertz='linear') on both sides (an LCP); "
+            "ltca_palmgren SliceCompliance() (Palmgren's law, an NCP).",
             "Baseline inputs (separations, compliance, arms) are taken from gearjax outside the timed "
             "region; the gearjax time includes its TCA and compliance.",
             "gearjax programs return only the compared quantities (TE; loaded TE and loads).",
@@ -628,6 +720,10 @@ def main(argv=None):
     if "ltca_slice" in args.problems:
         for loads in sizes["ltca_slice"]["loads"]:
             run_slice({k: v for k, v in sizes["ltca_slice"].items() if k != "loads"}, loads, args.repeats, out)
+    if "ltca_palmgren" in args.problems:
+        for loads in sizes["ltca_slice"]["loads"]:
+            run_slice({k: v for k, v in sizes["ltca_slice"].items() if k != "loads"}, loads, args.repeats, out,
+                      key="ltca_palmgren", label_prefix="LTCA slice (Palmgren)", hertz="palmgren")
     if args.growth:
         run_growth(sizes["growth"], args.repeats, out)
     out["total_s"] = time.perf_counter() - started
