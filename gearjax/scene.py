@@ -242,7 +242,8 @@ def _check_modification_fits(pair, modification, gear, name, relief_coordinates=
         return
     for zone in pair.contact_zones():
         start, tip = zone.relief_coordinates(gear) if relief_coordinates is None else relief_coordinates(zone, gear)
-        modification.check_fits(np.asarray(tip) - np.asarray(start), zone.face_width, name)
+        if is_concrete(start, tip, zone.face_width):  # not when built inside a transformation
+            modification.check_fits(np.asarray(tip) - np.asarray(start), zone.face_width, name)
 
 
 class SimulationResult(eqx.Module):
