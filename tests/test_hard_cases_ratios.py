@@ -68,7 +68,7 @@ def random_failures(groups):
 # No known failures. Until 2026-11-27 one of 150 designs on 17/170 failed (143, m_n 1.0 mm):
 # 4 flank solves whose contact lies 1 µm inside the end of the pinion's root relief, where
 # the flank's curvature jumps; the damped fallback needs 40-71 steps there and had 32 at
-# `fast` (`tools/diagnostics/issue12/relief_kink.py`; `tca.analysis.fallback_steps`).
+# `fast` (`tools/diagnostics/relief_kink.py`; `tca.analysis.fallback_steps`).
 RANDOM_KNOWN: dict[str, str] = {}
 
 

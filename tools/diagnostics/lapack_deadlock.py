@@ -1,6 +1,6 @@
 """The XLA CPU deadlock of jaxlib 0.10's batched LAPACK kernels, reproduced in a few seconds.
 
-    python tools/diagnostics/issue12/lapack_deadlock.py [--gearjax] [--tries 5] [--timeout 60]
+    python tools/diagnostics/lapack_deadlock.py [--gearjax] [--tries 5] [--timeout 60]
 
 Runs the program of `tests/test_runtime.py` (two independent batched LU solves, 4000 x
 10x10 each, above jaxlib's 2e5-flop threshold for splitting a batch over XLA's intra-op
@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from test_runtime import DEADLOCK  # noqa: E402  (the program the test runs)
 
 

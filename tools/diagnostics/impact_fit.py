@@ -9,7 +9,7 @@ then fitted in numpy over sub-ranges of it, as `local_stiffness` does. The last 
 integrates the energy under the computed curve itself (no power law): the force at which
 the work done equals the kinetic energy.
 
-    python tools/diagnostics/issue12/impact_fit.py [--slices 9,21,41,81,161]
+    python tools/diagnostics/impact_fit.py [--slices 9,21,41,81,161]
 """
 import argparse
 
