@@ -75,8 +75,13 @@ def simulate_designs(
 
     Raises:
         ValueError: no batch given, a batch of the wrong type, batches of different
-            lengths, a modification that does not fit the scene's pair, or a `batch_size`
-            that is not a positive integer; all before anything is computed.
+            lengths, a modification that does not fit the scene's pair, a `batch_size`
+            that is not a positive integer or `outputs` that is not a function; all before
+            anything is computed.
+
+    Under `jax.grad`, `jit` or `vmap` (traced designs) the concrete checks are skipped and
+    out-of-range designs get NaN outputs and `RESULTS.invalid_modification` (as
+    `simulate`).
     """
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a Scene; got {type(scene).__name__}")

@@ -1,6 +1,7 @@
 """`simulate_designs`: many designs of one pair in one call equal `simulate` of each design."""
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -53,6 +54,22 @@ def test_surface_designs_in_chunks_with_errors_equal_single_runs(seed_pair):
               for m, e in zip(mods, errors)]
     np.testing.assert_allclose(np.asarray(te), np.stack([np.asarray(s) for s in single]), rtol=1e-9, atol=1e-14)
     assert np.ptp(np.asarray(te), axis=0).min() > 1e-6  # the pitch errors move the TE (rad)
+
+
+def slice_total(result):
+    return jnp.sum(jnp.where(result.tca.valid, result.tca.slice_te, 0.0))
+
+
+def test_designs_are_differentiable_like_single_runs(seed_pair):
+    """`jax.grad` through `simulate_designs` (traced designs: no concrete checks) equals the
+    gradient of each design's own `simulate`."""
+    scene = Scene(seed_pair, accuracy=PLANE)
+    grad = jax.grad(lambda y: jnp.sum(simulate_designs(scene, FlankModification.from_vector(y), outputs=slice_total)))(
+        jnp.asarray(Y))
+    single = [jax.grad(lambda y: slice_total(simulate(Scene(seed_pair, FlankModification.from_vector(y), accuracy=PLANE,
+                                                             pairs=scene.pairs))))(jnp.asarray(y)) for y in Y]
+    np.testing.assert_allclose(np.asarray(grad), np.stack([np.asarray(g) for g in single]), rtol=1e-10, atol=1e-14)
+    assert np.abs(np.asarray(grad)).max() > 1e-3  # the reliefs move the slices' contact
 
 
 def test_a_design_out_of_range_is_named(seed_pair):
