@@ -6,7 +6,9 @@
 The default scene (seed 001 pair, paper optimum, plane-of-action TCA) with
 `SliceCompliance(hertz=...)` or `IsoCompliance()`, at `--loads` torques from 100 to
 2 000 N·m (1 000 N·m for one): each stage jitted on its own, run on the previous stage's
-output, timed after a warm-up (median of `--repeats`), beside the whole `load_sweep`.
+output, timed after a warm-up (median of `--repeats`), beside the whole `load_sweep`; the
+slice model's compliance also in its two parts (the tooth integrals of every point, the
+coupled blocks built from them).
 It also reports the active-set steps of every position (under `vmap` the loop runs to the
 largest) and the points loaded per tooth pair: the solve's cost is steps × one Cholesky
 factorisation per tooth-pair block (slices × slices) per position.
@@ -32,6 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine, write  # noqa: E402
 
 from gearjax.ltca import analysis as ltca_analysis  # noqa: E402
+from gearjax.ltca.compliance import pasternak_compliance  # noqa: E402
 from gearjax.ltca.solver import NO_CONTACT, ContactProblem, solve_with  # noqa: E402
 from gearjax.scene_file import default_scene  # noqa: E402
 
@@ -80,6 +83,29 @@ def main(argv=None):
         p, q = ltca_analysis._levers(tca, n_mid, pair.center(1))
         return points.blocks, points.nonlinear, separation, p, q
 
+    @jax.jit
+    def integrals_stage(s, tca):
+        """The slice model's tooth compliances of every point (both teeth), summed."""
+        pair = s.pair.resolve()
+        c = model.compliance
+        return tuple(sum(c.tooth_compliances(pair, model.material, model.hub_radius, gear, u[..., :n_mid],
+                                             model.accuracy.quadrature_points))
+                     for gear, u in ((0, tca.pinion_parameter), (1, tca.gear_parameter)))
+
+    @jax.jit
+    def blocks_stage(s, tca, c1, c2):
+        """The slice model's coupled blocks from the per-point compliances."""
+        pair = s.pair.resolve()
+        dz = jnp.mean(tca.slice_width[..., :n_mid])
+        lam = model.compliance.coupling_length * pair.normal_module
+        frac = tca.transverse_normal_fraction[..., :n_mid]
+
+        def block(c1k, c2k, fk):
+            transverse = pasternak_compliance(c1k, dz, lam) + pasternak_compliance(c2k, dz, lam)
+            return fk[:, None] * transverse * fk[None, :]
+
+        return jax.vmap(jax.vmap(block))(c1, c2, frac)
+
     exponent = 1.0 if args.hertz == "linear" or args.compliance == "iso" else 0.9
     diagonal = args.compliance == "iso"
 
@@ -100,6 +126,10 @@ def main(argv=None):
 
     t_tca, tca = median_time(tca_stage, scene, repeats=args.repeats)
     t_compliance, data = median_time(compliance_stage, scene, tca, repeats=args.repeats)
+    split = {}
+    if args.compliance == "slice":
+        split["compliance_integrals_s"], per_point = median_time(integrals_stage, scene, tca, repeats=args.repeats)
+        split["compliance_blocks_s"], _ = median_time(blocks_stage, scene, tca, *per_point, repeats=args.repeats)
     t_solve, solution = median_time(solve_stage, *data, torques, repeats=args.repeats)
     t_whole, _ = median_time(whole, scene, torques, repeats=args.repeats)
     steps = np.asarray(solution.steps)
@@ -108,13 +138,13 @@ def main(argv=None):
         "machine": machine(),
         "sizes": {"compliance": args.compliance, "positions": args.positions, "slices": args.slices,
                   "pairs": len(scene.pairs), "loads": args.loads, "hertz": args.hertz},
-        "tca_s": t_tca, "compliance_s": t_compliance, "solve_s": t_solve, "load_sweep_s": t_whole,
+        "tca_s": t_tca, "compliance_s": t_compliance, **split, "solve_s": t_solve, "load_sweep_s": t_whole,
         "steps": steps.tolist(), "steps_max": int(steps.max()), "steps_mean": float(steps.mean()),
         "loaded_pairs_per_position": [int(v) for v in (loaded > 0).sum(-1)],
         "loaded_points_per_position": [int(v) for v in loaded.sum(-1)],
         "factorisations_per_solve": int(steps.max()) * args.positions * len(scene.pairs) * args.loads,
     }
-    for key in ("tca_s", "compliance_s", "solve_s", "load_sweep_s"):
+    for key in ("tca_s", "compliance_s", *split, "solve_s", "load_sweep_s"):
         print(f"{key}: {out[key] * 1e3:.2f} ms")
     if out["steps_max"] == 0:  # the diagonal model's exact solver: no active-set steps
         print("exact diagonal solver: one sort per position, no factorisation")
