@@ -47,6 +47,22 @@ def time_compiled_output(fn, *args, repeats: int = 5, warmup: int = 1):
     return compile_s, statistics.median(runs), runs, output
 
 
+def first_and_runs(fn, *args, repeats: int = 5):
+    """(seconds of the first call: trace, compile and run; median of `repeats` later calls
+    after one warm-up; the later calls; the output) of `fn(*args)`, a jitted function or a
+    public gearjax call, each call waited for (`jax.block_until_ready`)."""
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    jax.block_until_ready(fn(*args))
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(*args))
+        runs.append(time.perf_counter() - t0)
+    return first, statistics.median(runs), runs, out
+
+
 def time_host(fn, *args, repeats: int = 5, warmup: int = 1):
     """(median seconds, all run times, last output) of a host (NumPy/SciPy) call `fn(*args)`."""
     output = None

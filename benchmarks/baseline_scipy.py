@@ -33,7 +33,7 @@ anything is reported (an `AssertionError` otherwise):
    warm-started from the previous torque, or from the previous position for its first).
 
 4. `ltca_palmgren`: the same with Palmgren's contact law (`SliceCompliance()`, the
-   default): $y = CF + aF^{0.9} + e - q\Theta$, a nonlinear complementarity problem.
+   default): $y = CF + aF^{0.9} + e - q\\Theta$, a nonlinear complementarity problem.
    Baseline: the same pivots, Newton's method on the bordered system of each active set,
    warm-started from the previous solve's loads.
 
@@ -72,7 +72,7 @@ import gearjax as gj  # before the first computation: it sets an XLA flag for th
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine, time_compiled_output, time_host, write  # noqa: E402
+from _common import first_and_runs, machine, time_compiled_output, time_host, write  # noqa: E402
 from tca import random_designs  # noqa: E402
 
 from gearjax.scene_file import default_scene  # noqa: E402
@@ -383,8 +383,8 @@ def lcp_active_set(C, e, p, q, torque, active, max_pivots):
 
 
 def ncp_active_set(C, a, exponent, e, p, q, torque, active, start, max_pivots):
-    """Solution of the nonlinear complementarity problem $y = CF + aF^{e} + e_0 - q\Theta
-    \ge 0$, $F \ge 0$, $F\cdot y = 0$, $p\cdot F = T$ (Palmgren's law, $e$ = 0.9): on the
+    """Solution of the nonlinear complementarity problem $y = CF + aF^{e} + e_0 - q\\Theta
+    \\ge 0$, $F \\ge 0$, $F\\cdot y = 0$, $p\\cdot F = T$ (Palmgren's law, $e$ = 0.9): on the
     active set, Newton's method on the bordered system (loads kept positive: no load loses
     more than 90 % in a step), then the same pivots as `lcp_active_set`: drop a point whose load tends to zero
     from above (below 1e-9 of the mean load), add the most violated gap. `start`: loads to
@@ -550,7 +550,7 @@ def run_tca(sizes, repeats, out):
     # The public call for many designs of one pair: the pair resolved once, only the TE returned.
     scene = rigid_scene(scene0.pair, None, acc, pairs=scene0.pairs)
     modifications = gj.FlankModification.from_vector(designs)
-    compile_s, run_s, runs, te_gj = time_first_and_runs(
+    compile_s, run_s, runs, te_gj = first_and_runs(
         lambda: gj.simulate_designs(scene, modifications, outputs=_transmission_error), repeats=repeats)
     # The same through jax.vmap(gj.simulate) over stacked scenes (a copy of the pair per
     # design), once with the whole result returned, once with the TE alone.
@@ -573,21 +573,6 @@ def run_tca(sizes, repeats, out):
 
 def _transmission_error(result):
     return result.tca.transmission_error
-
-
-def time_first_and_runs(call, repeats):
-    """(seconds of the first call: trace, compile and run; median of `repeats` later calls
-    after one warm-up; the later calls; the output) of a public gearjax call."""
-    t0 = time.perf_counter()
-    output = jax.block_until_ready(call())
-    first = time.perf_counter() - t0
-    jax.block_until_ready(call())
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        output = jax.block_until_ready(call())
-        runs.append(time.perf_counter() - t0)
-    return first, float(np.median(runs)), runs, output
 
 
 def _load_sweep_fn():

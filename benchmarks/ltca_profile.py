@@ -18,9 +18,7 @@ Writes `benchmarks/results/NAME.json` (default `ltca_profile`).
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import gearjax as gj  # before the first computation: its process settings
@@ -31,7 +29,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine, write  # noqa: E402
+from _common import first_and_runs, machine, write  # noqa: E402
 
 from gearjax.ltca import analysis as ltca_analysis  # noqa: E402
 from gearjax.ltca.compliance import pasternak_compliance  # noqa: E402
@@ -40,13 +38,9 @@ from gearjax.scene_file import default_scene  # noqa: E402
 
 
 def median_time(fn, *args, repeats):
-    out = jax.block_until_ready(fn(*args))
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(fn(*args))
-        runs.append(time.perf_counter() - t0)
-    return statistics.median(runs), out
+    """(median run seconds after a warm-up, output) of a jitted stage."""
+    _, median, _, out = first_and_runs(fn, *args, repeats=repeats)
+    return median, out
 
 
 def main(argv=None):

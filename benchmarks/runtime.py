@@ -1,6 +1,6 @@
 """What the installed JAX costs and gives: the public calls a user makes, compile and run apart.
 
-    python benchmarks/runtime.py [--repeats 5] [--rows te_batched ltca_iso ltca_slice cli] [--name NAME]
+    python benchmarks/runtime.py [--repeats 5] [--rows te_batched te_designs ltca_iso ltca_slice cli] [--name NAME]
 
 Run it under each interpreter to compare JAX versions back to back (`make` builds `.venv`
 from the newest Python >= 3.12; a Python 3.11 venv gets jax 0.10.2). Rows:
@@ -40,24 +40,10 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import machine, write  # noqa: E402
+from _common import first_and_runs, machine, write  # noqa: E402
 from tca import random_designs  # noqa: E402
 
 from gearjax.scene_file import default_scene  # noqa: E402
-
-
-def first_and_runs(fn, *args, repeats):
-    """(seconds of the first call, median of `repeats` later calls, the later calls, output)."""
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(fn(*args))
-    first = time.perf_counter() - t0
-    jax.block_until_ready(fn(*args))
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(fn(*args))
-        runs.append(time.perf_counter() - t0)
-    return first, statistics.median(runs), runs, out
 
 
 def te_batched(repeats):

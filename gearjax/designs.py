@@ -16,7 +16,6 @@ sliding velocities of every face slice when only the TE is read).
 
 from __future__ import annotations
 
-import types
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,7 +27,7 @@ import numpy as np
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
 from .resources import check_memory
-from .scene import Scene, SimulationResult, _check_modification_fits, _check_results, _prepare, _simulate
+from .scene import STAGES, Scene, SimulationResult, _check_codes, _check_modification_fits, _in_precision, _prepare, _simulate
 
 #: The batched parts of a scene, by `simulate_designs` keyword.
 _PARTS = (("modifications", "modification", FlankModification),
@@ -103,15 +102,14 @@ def simulate_designs(
             _check_modification_fits(scene.pair, batch[field], gear, f"{field}s", _relief_coordinates)
     check_memory(scene, what="simulate_designs", batch=min(count, batch_size or count))
     scene = _prepare(scene)
-    batch = _prepare_batch(scene, batch)
+    batch = _in_precision(batch, scene.accuracy)
     if scene.accuracy.dtype == "float32":
         with jax.enable_x64(False):
             out, codes = _simulate_designs(scene, batch, outputs, batch_size)
     else:
         out, codes = _simulate_designs(scene, batch, outputs, batch_size)
     if throw:
-        _check_results(SimulationResult(**{stage: None if code is None else types.SimpleNamespace(result=code)
-                                           for stage, code in codes.items()}))
+        _check_codes(codes)
     return out
 
 
@@ -146,12 +144,6 @@ def _count(batch: dict) -> int:
     return next(iter(lengths.values()))
 
 
-def _prepare_batch(scene: Scene, batch: dict) -> dict:
-    """The batch's floats in the scene's precision (`_prepare`)."""
-    dtype = jnp.float32 if scene.accuracy.dtype == "float32" else jnp.float64
-    return jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), batch)
-
-
 def _with(scene: Scene, design: dict) -> Scene:
     """`scene` with one design's parts put in."""
     for field, part in design.items():
@@ -165,8 +157,7 @@ def _simulate_designs(scene: Scene, batch: dict, outputs, batch_size):
 
     def one(design):
         result = _simulate(_with(scene, design))
-        codes = {stage: None if getattr(result, stage) is None else getattr(result, stage).result
-                 for stage in ("tca", "ltca", "impact")}
+        codes = {stage: getattr(result, stage).result for stage in STAGES if getattr(result, stage) is not None}
         return (result if outputs is None else outputs(result)), codes
 
     if batch_size is None:

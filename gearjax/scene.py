@@ -268,13 +268,21 @@ def _prepare(scene: Scene) -> Scene:
                 "accuracy.replace(dtype='float32')"
             )
         return scene
+    return _in_precision(scene, scene.accuracy)
+
+
+def _in_precision(tree, accuracy: Accuracy):
+    """`tree` with every floating array leaf cast to `accuracy.dtype` (unchanged in
+    float64, the dtype gearjax builds its arrays in)."""
+    if accuracy.dtype == "float64":
+        return tree
 
     def cast(x):
         if eqx.is_array(x) and jnp.issubdtype(x.dtype, jnp.floating):
             return x.astype(jnp.float32)
         return x
 
-    return jax.tree_util.tree_map(cast, scene)
+    return jax.tree_util.tree_map(cast, tree)
 
 
 def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
@@ -319,19 +327,27 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     return result
 
 
+#: the stages of `simulate`, in the order they run
+STAGES = ("tca", "ltca", "impact")
+
+
 def _check_results(result: SimulationResult) -> None:
     """Raise `SimulationError` for the first failed stage (the TCA only for out-of-range
     traced inputs: its unconverged candidates are a code, not an error); skipped when the
     results are traced (inside a transformation)."""
+    _check_codes({stage: getattr(result, stage).result for stage in STAGES if getattr(result, stage) is not None})
+
+
+def _check_codes(by_stage: dict) -> None:
+    """`_check_results` on the result codes alone, `{stage: codes}` for the stages run."""
     from ._solution import RESULTS, SimulationError, enum_message, enum_name
 
-    if not is_concrete(result):
+    if not is_concrete(by_stage):
         return
-    for stage in ("tca", "ltca", "impact"):
-        stage_result = getattr(result, stage)
-        if stage_result is None:
+    for stage in STAGES:
+        if stage not in by_stage:
             continue
-        codes = stage_result.result
+        codes = by_stage[stage]
         if stage == "tca":  # an unconverged TCA candidate is a code, not an error
             failed = np.asarray((codes == RESULTS.invalid_modification) | (codes == RESULTS.invalid_operating_point))
         else:
