@@ -2,13 +2,14 @@
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from gearjax import InvoluteGearPair
 from gearjax.ltca import iso_mesh_stiffness
-from gearjax.ltca.compliance import pasternak_compliance
+from gearjax.ltca.compliance import pasternak_compliance, symmetric_tridiagonal_inverse
 from gearjax.ltca.tooth_stiffness import foundation_compliance, gauss_legendre, root_half_angle, tooth_compliance
 
 E, NU = 206000.0, 0.3
@@ -120,3 +121,48 @@ def test_pasternak_coupling_decays_geometrically_and_softens_the_ends():
     assert 1.7 < measured < 2.0
     # no coupling: diagonal
     np.testing.assert_allclose(np.asarray(pasternak_compliance(c, dz, 0.0)), np.eye(n) * 1e-5 / dz, rtol=1e-12)
+
+
+def _spring_chain(rng, n, coupling):
+    """A random diagonally dominant tridiagonal matrix with off-diagonal entries <= 0."""
+    springs = rng.uniform(0.5, 2.0, n)
+    off = -coupling * rng.uniform(0.5, 2.0, n - 1)
+    diag = springs + np.r_[0.0, -off] + np.r_[-off, 0.0]
+    return diag, off
+
+
+@pytest.mark.parametrize("n", [2, 3, 41, 161])
+@pytest.mark.parametrize("coupling", [0.0, 1.0, 400.0])
+def test_tridiagonal_inverse_equals_a_dense_inverse(n, coupling):
+    rng = np.random.default_rng(n)
+    diag, off = _spring_chain(rng, n, coupling)
+    matrix = np.diag(diag) + np.diag(off, 1) + np.diag(off, -1)
+    expected = np.linalg.inv(matrix)
+    got = np.asarray(symmetric_tridiagonal_inverse(jnp.asarray(diag), jnp.asarray(off)))
+    # the dense inverse's own error grows with the condition number (up to ~1e5 here)
+    scale = np.abs(expected).max() * np.linalg.cond(matrix)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-14 * scale)
+    np.testing.assert_array_equal(got, got.T)
+    if coupling == 0.0:
+        np.testing.assert_array_equal(got, np.diag(1.0 / diag))  # exact zeros off the diagonal
+    # float32: finite at every size (no minors that overflow), a few eps of the condition number
+    got32 = np.asarray(symmetric_tridiagonal_inverse(jnp.asarray(diag, jnp.float32), jnp.asarray(off, jnp.float32)))
+    np.testing.assert_allclose(got32, expected, rtol=0, atol=1e-6 * scale)
+
+
+def test_tridiagonal_inverse_gradient_equals_the_linear_solves():
+    rng = np.random.default_rng(7)
+    diag, off = _spring_chain(rng, 17, 3.0)
+    weights = jnp.asarray(rng.normal(size=(17, 17)))
+
+    def closed_form(d, o):
+        return jnp.sum(weights * symmetric_tridiagonal_inverse(d, o))
+
+    def solved(d, o):
+        pad = jnp.zeros(1, d.dtype)
+        inverse = jax.lax.linalg.tridiagonal_solve(jnp.concatenate([pad, o]), d, jnp.concatenate([o, pad]), jnp.eye(17, dtype=d.dtype))
+        return jnp.sum(weights * inverse)
+
+    args = (jnp.asarray(diag), jnp.asarray(off))
+    for got, expected in zip(jax.grad(closed_form, (0, 1))(*args), jax.grad(solved, (0, 1))(*args)):
+        np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-13)

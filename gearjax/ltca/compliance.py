@@ -20,8 +20,8 @@ $\Delta z$ over $\Delta z/|n_t|$.
   Sainsot's fillet foundation of both teeth at their own contact positions, plus contact.
   Neighbouring slices of a tooth are coupled by a shear (Pasternak) layer: the tooth's
   stiffness matrix is $K = \mathrm{diag}(k_j\Delta z) + k_cT$, $T = \mathrm{tridiag}(-1, 2, -1)$
-  with free ends, $k_c = \bar k\lambda^2/\Delta z$, and its compliance $K^{-1}$ (solved with
-  JAX's tridiagonal solver). A point load then spreads along the face with the decay
+  with free ends, $k_c = \bar k\lambda^2/\Delta z$, and its compliance $K^{-1}$ (in closed
+  form, `symmetric_tridiagonal_inverse`). A point load then spreads along the face with the decay
   length $\lambda$ (influence $\propto e^{-|y|/\lambda}$) while a uniform load is carried as
   without coupling, so the mean stiffness is unaffected and the face ends come out about
   twice as compliant. This is the Winkler-plus-shear-layer model of Ajmi & Velex (2005,
@@ -142,7 +142,7 @@ def pasternak_compliance(compliance_per_width, slice_width, decay_length):
 
     $K = \\mathrm{diag}(k_j\\Delta z) + k_cT$, $k_j = 1/c_j$, $k_c = \\bar k\\lambda^2/\\Delta z$,
     $T = \\mathrm{tridiag}(-1, 2, -1)$ with free ends ($T_{11} = T_{nn} = 1$); returns
-    $K^{-1}$ by a tridiagonal solve of the identity.
+    $K^{-1}$ (`symmetric_tridiagonal_inverse`).
 
     Args:
         compliance_per_width: $c_j$ of each slice (mm²/N), shape (n,).
@@ -155,13 +155,62 @@ def pasternak_compliance(compliance_per_width, slice_width, decay_length):
     n = c.shape[-1]
     ends = jnp.zeros(n, dtype=c.dtype).at[0].set(1.0).at[-1].set(1.0)
     diag = k * slice_width + kc * (2.0 - ends)
-    off = -kc * jnp.ones(n - 1, dtype=c.dtype)
-    lower = jnp.concatenate([jnp.zeros(1, c.dtype), off])
-    upper = jnp.concatenate([off, jnp.zeros(1, c.dtype)])
-    # JAX's tridiagonal solver (Thomas algorithm) on all columns of the identity at once:
-    # differentiable, and free of lineax's error checks (host callbacks, which would keep
-    # the program out of the compilation cache).
-    return jax.lax.linalg.tridiagonal_solve(lower, diag, upper, jnp.eye(n, dtype=c.dtype))
+    return symmetric_tridiagonal_inverse(diag, jnp.broadcast_to(-kc, (n - 1,)).astype(c.dtype))
+
+
+def symmetric_tridiagonal_inverse(diag, off):
+    r"""Inverse of a symmetric, diagonally dominant tridiagonal matrix with off-diagonal
+    entries $\le 0$ (the stiffness matrix of springs in a chain), in closed form.
+
+    With the pivots of the elimination from the top, $d_1 = a_1$,
+    $d_i = a_i - b_{i-1}^2/d_{i-1}$, and from the bottom, $\delta_n = a_n$,
+    $\delta_i = a_i - b_i^2/\delta_{i+1}$ ($a$ the diagonal, $b_i$ the entry $(i, i+1)$):
+
+    $$(K^{-1})_{jj} = \frac{1}{d_j + \delta_j - a_j}, \qquad
+    (K^{-1})_{ij} = (K^{-1})_{jj}\prod_{k=i}^{j-1}\left(-\frac{b_k}{d_k}\right)\quad(i < j)$$
+
+    (Meurant, SIAM J. Matrix Anal. Appl. 13 (1992) 707, Theorem 2.3, in ratio form). The
+    ratios $-b_k/d_k$ lie in $[0, 1)$, so their products are taken as differences of
+    cumulative logarithms: nothing overflows at any size, unlike the recurrences for the
+    minors.
+    O(n) sequential steps and O(n²) elementwise work: no linear-algebra library call, which
+    for many small matrices costs more than the arithmetic (on a GPU, far more).
+
+    Args:
+        diag: $a$, shape (n,).
+        off: $b$, shape (n - 1,).
+
+    Returns:
+        $K^{-1}$, shape (n, n).
+    """
+    n = diag.shape[-1]
+    if n == 1:
+        return (1.0 / diag)[:, None]
+    b2 = off**2
+
+    def pivots(carry, x):
+        d_prev, e_next = carry
+        a_fwd, b2_fwd, a_bwd, b2_bwd = x
+        d, e = a_fwd - b2_fwd / d_prev, a_bwd - b2_bwd / e_next
+        return (d, e), (d, e)
+
+    # one scan runs both eliminations: from the top over rows 2..n, from the bottom over n-1..1
+    _, (d_rest, e_rest) = jax.lax.scan(pivots, (diag[0], diag[-1]), (diag[1:], b2, diag[-2::-1], b2[::-1]))
+    d = jnp.concatenate([diag[:1], d_rest])
+    e = jnp.concatenate([e_rest[::-1], diag[-1:]])
+    inverse_diag = 1.0 / (d + e - diag)
+    # the products as differences of cumulative logs; a ratio of zero (uncoupled rows) is
+    # floored at the smallest normal number, and a product below its square root (1e-154 in
+    # float64, 1e-19 in float32: far below rounding) is exactly zero, whatever the sums' rounding
+    floor = 0.5 * jnp.log(jnp.finfo(diag.dtype).tiny)
+    log_ratio = jnp.log(jnp.maximum(-off / d[:-1], jnp.finfo(diag.dtype).tiny))
+    cumulative = jnp.concatenate([jnp.zeros(1, diag.dtype), jnp.cumsum(log_ratio)])
+    i = jnp.arange(n)[:, None]
+    j = jnp.arange(n)[None, :]
+    upper = j >= i
+    log_product = jnp.where(upper, cumulative[None, :] - cumulative[:, None], cumulative[:, None] - cumulative[None, :])
+    product = jnp.where(log_product > floor, jnp.exp(log_product), 0.0)
+    return product * jnp.where(upper, inverse_diag[None, :], inverse_diag[:, None])
 
 
 class SliceCompliance(AbstractCompliance):
