@@ -54,7 +54,7 @@ FILE_COSTS = {
     "test_optimize.py": 822, "test_sweep.py": 455, "test_impact.py": 395, "test_notebooks.py": 390,
     "test_ltca.py": 295, "test_hard_cases.py": 216, "test_results.py": 178, "test_hard_cases_double_arc.py": 176,
     "test_hard_cases_curvilinear.py": 170, "test_tca.py": 135, "test_hard_cases_ratios.py": 123,
-    "test_transforms.py": 107, "test_cli.py": 106, "test_curvilinear.py": 96, "test_scene.py": 90,
+    "test_impact_convergence.py": 140, "test_transforms.py": 107, "test_cli.py": 106, "test_curvilinear.py": 96, "test_scene.py": 90,
     "test_cache.py": 46, "test_double_arc.py": 27, "test_resources.py": 23,
 }
 
