@@ -1,4 +1,4 @@
-"""Cost of the optimisation objective (issue #14's speed targets).
+"""Cost of the optimisation objective.
 
     python benchmarks/optimize.py [--accuracy fast] [--repeats 5]
 

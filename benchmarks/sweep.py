@@ -1,4 +1,4 @@
-"""Throughput of the batched sweeps (issue #13): how the cost grows with loads, speeds and
+"""Throughput of the batched sweeps: how the cost grows with loads, speeds and
 designs.
 
     python benchmarks/sweep.py [--accuracy fast] [--repeats 3]

@@ -45,11 +45,9 @@ jax.config.update("jax_numpy_dtype_promotion", "strict")
 gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False)
 
 
-#: Approximate cost (s) of each test file in one whole run on 2 cores (2026-11-27,
-#: `GEARJAX_TEST_PROFILE` and `tools/test_profile.py`; the machine also ran a 4-minute test
-#: and two diagnostics beside it). Only the schedule uses them; in that run the two workers
-#: were busy 1 940 and 1 938 s, 75 % of it tracing and compiling in their own processes
-#: (notebook kernels and command-line subprocesses not counted).
+#: Approximate cost (s) of each test file in one whole run on 2 cores, from a profile
+#: (`GEARJAX_TEST_PROFILE` and `tools/test_profile.py`). Only the schedule uses them: the
+#: order matters, not the values; most of each is tracing and compiling.
 FILE_COSTS = {
     "test_optimize.py": 822, "test_sweep.py": 455, "test_impact.py": 395, "test_notebooks.py": 390,
     "test_ltca.py": 295, "test_hard_cases.py": 216, "test_results.py": 178, "test_hard_cases_double_arc.py": 176,

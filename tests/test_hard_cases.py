@@ -1,4 +1,4 @@
-"""Hard cases of the seed's involute pair stay numerically stable (issue #12, parts 3 and 4).
+"""Hard cases of the seed's involute pair stay numerically stable.
 
 One parametrised list of named cases on seed 001's 29/71 pair (`CASES`; the ratios 1:1
 and 1:10 are in `test_hard_cases_ratios.py`, the curvilinear and double-circular-arc cases
@@ -194,7 +194,7 @@ def test_float32_seed_pair_matches_float64(groups):
     lte32, lte64 = float(jnp.mean(single.ltca.transmission_error)), float(jnp.mean(double.ltca.transmission_error[i]))
     # float32 resolves a slice's offset to about the TCA's coincidence floor (a few ulps of
     # the centre distance, `tca._slice.COINCIDENCE_ULPS`) over the gear's base radius:
-    # 7.3e-7 rad here, 0.6 % of the LTE mean (measured 2e-7 rad, 0.2 %, on 2026-11-27).
+    # 7.3e-7 rad here, 0.6 % of the LTE mean (measured: 2e-7 rad, 0.2 %).
     pair = helical()
     resolution = COINCIDENCE_ULPS * float(jnp.finfo(jnp.float32).eps) * float(pair.center_distance) / float(pair.base_radius[1])
     assert lte32 == pytest.approx(lte64, rel=0, abs=resolution)
@@ -209,8 +209,8 @@ def random_failures(groups):
     return count_failures({"seed_29_71": (groups[0], len(CASES), len(CASES) + RANDOM)})
 
 
-# No failure is known on these 400 designs at the `fast` preset (2026-11-26). The 20 impact
-# searches that did not converge before (the gap H jumped where the TCA's flank solve missed
+# No failure is known on these 400 designs at the `fast` preset. Impact searches that did
+# not converge in an earlier engine (the gap H jumped where the TCA's flank solve missed
 # a flank contact inside a deep, short relief) converge since the TCA checks that an edge
 # contact is a maximum of the offset (`tca._slice.edge_is_first`) and the search checks its
 # bracket's ends.

@@ -1,4 +1,4 @@
-"""Hard cases of the curvilinear family (issue #12, parts 3 and 4); what is checked and
+"""Hard cases of the curvilinear family; what is checked and
 why is in `test_hard_cases.py`.
 
 Seed 002's 20/30 pair: the tooth-trace radius from just above b/2 (its lower limit) to
@@ -83,8 +83,8 @@ def random_failures(curvilinear):
     return count_failures({"curvilinear": (curvilinear[0], len(CASES), len(CASES) + RANDOM)})
 
 
-# No failure is known on these 260 designs at the `fast` preset (2026-11-26; the 2 impact
-# searches that did not converge before converge since the fix of test_hard_cases.py's 20).
+# No failure is known on these 260 designs at the `fast` preset (the first-contact
+# searches converge since the TCA checks that an edge contact is a maximum of the offset).
 RANDOM_KNOWN = {}
 
 

@@ -1,4 +1,4 @@
-"""Hard cases of the double-circular-arc family (issue #12, parts 3 and 4); what is
+"""Hard cases of the double-circular-arc family; what is
 checked and why is in `test_hard_cases.py`.
 
 The 24/24 pair (m_n 4, β 15°, b 55): the axial pitch error Δ_α at 0 and at the bounds

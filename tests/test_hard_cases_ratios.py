@@ -1,5 +1,5 @@
-"""Hard cases of involute pairs at the ratios 1:1 (40/40) and 1:10 (17/170) (issue #12,
-parts 3 and 4); what is checked and why is in `test_hard_cases.py`.
+"""Hard cases of involute pairs at the ratios 1:1 (40/40) and 1:10 (17/170); what is
+checked and why is in `test_hard_cases.py`.
 
 Each pair of tooth counts is its own static structure: its named case (seed 001's helix
 angle, face width and optimum modification) and its random designs run through one
@@ -65,10 +65,9 @@ def random_failures(groups):
     return failed
 
 
-# No known failures. Until 2026-11-27 one of 150 designs on 17/170 failed (143, m_n 1.0 mm):
-# 4 flank solves whose contact lies 1 µm inside the end of the pinion's root relief, where
-# the flank's curvature jumps; the damped fallback needs 40-71 steps there and had 32 at
-# `fast` (`tools/diagnostics/relief_kink.py`; `tca.analysis.fallback_steps`).
+# No known failures. Design 143 on 17/170 (m_n 1.0 mm) is the hardest: 4 flank solves whose contact lies 1 µm inside the end of the pinion's root relief, where
+# the flank's curvature jumps; the damped fallback needs 40-71 steps there, so it has at
+# least 128 at any preset (`tools/diagnostics/relief_kink.py`; `tca.analysis.fallback_steps`).
 RANDOM_KNOWN: dict[str, str] = {}
 
 

@@ -50,10 +50,8 @@ def space(scene):
 
 @pytest.fixture(scope="module")
 def designs(space):
-    """Paper optimum, a deep relief (the gradient's 1000 N·m optimum of the seed 001 search
-    run before issue #12's TCA fix, which engages flank on flank at 400-1600 N·m), and
-    10 random designs (mm). (The short, deep relief used before, a GA optimum of the
-    engine before issue #12's TCA fix, strikes with the tip edge since that fix.)"""
+    """Paper optimum, a long deep relief (an earlier gradient optimum of seed 001, which
+    engages flank on flank at 400-1600 N·m), and 10 random designs (mm)."""
     rng = np.random.default_rng(3)
     out = np.array(space.to_design(rng.uniform(size=(POPULATION, 6))))
     out[0] = np.asarray(paper_optimum().as_vector())
@@ -86,8 +84,8 @@ def test_objective_is_simulate_impact_force_and_batch_is_a_loop(objective, scene
     for i in (0, 1, 5):
         force = float(_simulate(objective, designs[i]).impact.force)
         assert batch_values[i] == pytest.approx(force, rel=1e-8)
-    # Every design scores (random design 3's first-contact search failed until the TCA fix
-    # of issue #12). A design whose stages fail scores +inf and leaves the others alone:
+    # Every design scores (random design 3's first-contact search is a hard one: its flank
+    # contact lies inside a deep relief). A design whose stages fail scores +inf and leaves the others alone:
     # y6 = b in place of design 3, out of range inside the program (`invalid_modification`).
     assert np.all(np.isfinite(batch_values))
     broken = designs.copy()

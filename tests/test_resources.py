@@ -1,4 +1,4 @@
-"""The memory guard (issue #12, part 5): a scene whose program cannot fit is refused before
+"""The memory guard: a scene whose program cannot fit is refused before
 anything is compiled, with the knobs and the estimate named; the estimate against XLA's own
 memory plan of a scene that fits."""
 

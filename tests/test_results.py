@@ -136,7 +136,7 @@ def test_compiled_simulate_program_has_no_host_callback(seed_pair, effects, comp
 
 
 def test_out_of_range_traced_inputs_give_nan_and_a_named_code(seed_pair):
-    """Inside jit the constructors cannot check traced values (issue #12, part 7): a
+    """Inside jit the constructors cannot check traced values: a
     modification with y6 = b (the crowning parabola's 0/0) gives NaN outputs and
     `invalid_modification` on every stage, a negative torque `invalid_operating_point`;
     in range, the same compiled program gives the concrete scene's numbers; and a

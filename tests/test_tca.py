@@ -277,8 +277,8 @@ def test_flank_contact_inside_a_steep_tip_relief_is_not_missed():
     """A spur pair with a short, deep pinion tip relief (27 um over 0.27 mm, random design
     0 of `test_hard_cases.py`) just after the conjugate contact has left the pinion's tip:
     the first contact is on the flanks at the start of the relief, ahead of the tip edge
-    (issue #12: the flank solve ran past the tip, so the TCA took the edge, ~3e-4 rad lower,
-    and the impact search met a jump). The TCA's slice values equal the largest offset
+    (a flank solve that runs past the tip would make the TCA take the edge, ~3e-4 rad lower,
+    and the impact search meet a jump). The TCA's slice values equal the largest offset
     along the curve of coincident points, found independently by brute force: for 2 001
     pinion profile points $u_1$ on the active flank, the gear point $u_2$ and offset that
     bring the flanks together (2 equations, Newton), the largest offset among those with

@@ -1,4 +1,4 @@
-"""Sharded sweeps against one device, on forced CPU host devices (issue #13, part 3).
+"""Sharded sweeps against one device, on forced CPU host devices.
 
     python tools/check_sharding.py [--devices 4] [--timeout 600]
 

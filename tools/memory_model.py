@@ -1,5 +1,5 @@
 """The memory model of `gearjax.resources`: its constants from XLA's memory plan, and its
-estimate against the measured peak memory of larger scenes (issue #12, part 5).
+estimate against the measured peak memory of larger scenes.
 
     python tools/memory_model.py
 

@@ -1,8 +1,8 @@
 """What the TCA fallback's step cap costs (`tca.analysis.fallback_steps`): the batched
 forward program of `tests/_cases.py` (TCA + LTCA at `fast`, `vmap` over 20 designs) on
 two batches of random 17/170 designs, the one with design 143 (whose retried solves need
-up to 71 steps) and the first one, with the cap given on the command line (32, 4 x `newton_max_steps`, before
-2026-11-27; 128, now: the default). Under `vmap` the fallback runs for every batch, and
+up to 71 steps) and the first one, with the cap given on the command line (e.g. 32, 4 x
+`newton_max_steps`, against 128, the default). Under `vmap` the fallback runs for every batch, and
 its loop runs until the slowest retried solve of the batch stops. Prints compile and median run
 times and the failed solves where the contact matters. Run from the repository root."""
 import sys

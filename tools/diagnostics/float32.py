@@ -1,4 +1,4 @@
-"""The float32 seed pair of `tests/test_hard_cases.py` (a strict xfail until 2026-11-27): the `fast`
+"""The float32 seed pair of `tests/test_hard_cases.py`: the `fast`
 scene at the paper optimum, 1000 N·m, pairs -2..2, in float32 and float64; prints the
 unconverged TCA solves, the missed contacts (`tests/_cases.missed_contacts`), the LTCA and
 impact results and how far the float32 LTE mean and impact force are from float64."""

@@ -1,6 +1,6 @@
 """How the impact force of seed 001's pair (paper optimum, 5000 rpm) depends on the face
 slices and on the force range of the local stiffness fit (run from the repository root,
-about 5 min; issue #12). The contact solver gets `reference`'s 80 steps: at 81 slices
+about 5 min). The contact solver gets `reference`'s 80 steps: at 81 slices
 and 1000 N·m the default 40 do not settle the LTCA's active set.
 
 For each slice count the incoming pair's force-approach curve delta(F) is computed once at

@@ -6,7 +6,7 @@ Runs the program of `tests/test_runtime.py` (two independent batched LU solves, 
 10x10 each, above jaxlib's 2e5-flop threshold for splitting a batch over XLA's intra-op
 pool, 20 times) in a fresh process, `--tries` times, each under `--timeout` seconds, with the concurrency-optimised
 scheduler on and, with `--gearjax`, gearjax imported first (its `PJRT_NPROC=1`). Prints how
-many tries hung. 2026-11-26, 2 cores, jaxlib 0.10.2: 5/5 hung without gearjax's setting,
+many tries hung. On 2 cores with jaxlib 0.10.2: 5/5 hung without gearjax's setting,
 0/5 with it; with `--xla_cpu_enable_concurrency_optimized_scheduler=false` alone (the old
 workaround) this program returns, the test suite's derivative programs still hung.
 """

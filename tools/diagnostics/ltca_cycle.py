@@ -1,4 +1,4 @@
-"""The contact problem on which the Palmgren Newton iteration cycled (issue #12): seed 001's
+"""The contact problem on which the Palmgren Newton iteration cycled: seed 001's
 pair, paper optimum, 1000 N·m, 81 face slices, position 8 of 32 per pitch. Run from the
 repository root: prints whether the solver converges with and without the damped steps
 (`gearjax.ltca.solver._fraction_to_boundary`) on the whole problem and on the tooth pairs

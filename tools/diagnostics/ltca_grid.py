@@ -1,7 +1,7 @@
 """LTE peak-to-peak, mean LTE and maximum pressure of seed 001's pair (paper optimum) over
 positions per pitch x face slices, at 400, 1000 and 1600 N·m, LTCA only, with the
 (position, pair, slice) of the pressure maximum (run from the repository root; about
-10 min; issue #12). The reference preset is 128 positions x 81 slices."""
+10 min). The reference preset is 128 positions x 81 slices."""
 import time
 
 import jax
