@@ -49,11 +49,12 @@ gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False
 #: (`GEARJAX_TEST_PROFILE` and `tools/test_profile.py`). Only the schedule uses them: the
 #: order matters, not the values; most of each is tracing and compiling.
 FILE_COSTS = {
-    "test_optimize.py": 822, "test_sweep.py": 455, "test_impact.py": 395, "test_notebooks.py": 390,
-    "test_ltca.py": 295, "test_hard_cases.py": 216, "test_results.py": 178, "test_hard_cases_double_arc.py": 176,
-    "test_hard_cases_curvilinear.py": 170, "test_tca.py": 135, "test_hard_cases_ratios.py": 123,
-    "test_impact_convergence.py": 140, "test_transforms.py": 107, "test_cli.py": 106, "test_curvilinear.py": 96, "test_scene.py": 90,
-    "test_cache.py": 46, "test_double_arc.py": 27, "test_resources.py": 23,
+    "test_optimize.py": 525, "test_sweep.py": 308, "test_impact.py": 282, "test_notebooks.py": 274,
+    "test_hard_cases.py": 143, "test_ltca.py": 138, "test_impact_convergence.py": 135, "test_results.py": 130,
+    "test_hard_cases_double_arc.py": 106, "test_hard_cases_curvilinear.py": 100, "test_tca.py": 80,
+    "test_cli.py": 80, "test_transforms.py": 70, "test_scene.py": 58, "test_hard_cases_ratios.py": 54,
+    "test_curvilinear.py": 45, "test_cache.py": 29, "test_designs.py": 27, "test_double_arc.py": 22,
+    "test_scene_fuzz.py": 20, "test_resources.py": 11,
 }
 
 
