@@ -1,5 +1,5 @@
-"""What accuracy costs in time (issue #12, part 1): error against `reference` and time, per
-preset and per knob varied alone around `default`.
+"""What accuracy costs in time: error against `reference` and time, per preset and per knob
+varied alone around `default`.
 
     python benchmarks/accuracy.py [--cases seed001,spur,curvilinear] [--repeats 3]
 
@@ -12,7 +12,8 @@ Cases (each through the public `simulate`, one compiled program per case and set
 
 Settings: the presets `fast`, `default`, `reference`, and `default` with one knob changed
 (positions per pitch, face slices, Newton tolerances, quadrature points, impact fit points,
-the plane-of-action TCA, float32). Quantities, in the units of `gearjax run --json`: TE
+the plane-of-action TCA, float32), and a run finer than `reference` (161 slices, 256
+positions per pitch), whose row holds the reference's own error against it. Quantities, in the units of `gearjax run --json`: TE
 and LTE peak-to-peak, LTE mean, mean mesh stiffness, maximum load share, maximum pressure,
 impact force, strike point (mm) and regime. Errors are relative to `reference`
 (to max(|reference|, 0.1 µm) for the TE and LTE quantities, which are zero for perfect
@@ -56,6 +57,8 @@ QUANTITIES = {
 FLOORS = {"te_pp_um": 0.1, "lte_pp_um": 0.1, "lte_mean_um": 0.1}
 
 DEFAULT = gj.Accuracy.preset("default")
+#: the setting whose row is the reference's error against a finer run
+FINER = "finer than reference"
 SETTINGS = {
     "fast": gj.Accuracy.preset("fast"),
     "default": DEFAULT,
@@ -63,6 +66,7 @@ SETTINGS = {
     "positions 16": DEFAULT.replace(positions_per_pitch=16),
     "positions 64": DEFAULT.replace(positions_per_pitch=64),
     "slices 9": DEFAULT.replace(face_slices=9),
+    "slices 31": DEFAULT.replace(face_slices=31),
     "slices 41": DEFAULT.replace(face_slices=41),
     "newton 1e-8": DEFAULT.replace(newton_rtol=1e-8, newton_atol=1e-8),
     "newton 1e-13": DEFAULT.replace(newton_rtol=1e-13, newton_atol=1e-13),
@@ -72,6 +76,8 @@ SETTINGS = {
     "fit points 12": DEFAULT.replace(impact_fit_points=12),
     "plane of action": DEFAULT.replace(tca_method="plane_of_action"),
     "float32": DEFAULT.replace(dtype="float32"),
+    # twice the reference's slices and positions: its row holds the reference's own error
+    FINER: gj.Accuracy.preset("reference").replace(face_slices=161, positions_per_pitch=256),
 }
 
 
@@ -136,11 +142,14 @@ def main() -> None:
     parser.add_argument("--settings", default=",".join(SETTINGS))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--plot", action="store_true", help="only draw the figure from the results file")
+    parser.add_argument("--markdown", action="store_true", help="only print the tables of docs/accuracy.md from the results file")
     parser.add_argument("--resume-from", help="keep the other rows (cases, or settings of a case, not rerun) from "
                         "this results file; a case's reference is always rerun")
     args = parser.parse_args()
     if args.plot:
         return plot()
+    if args.markdown:
+        return markdown()
     table = cases()
     rows = []
     settings = args.settings.split(",")
@@ -161,7 +170,8 @@ def main() -> None:
                 values, compile_s, run_s = reference, ref_compile, ref_run
             else:
                 values, compile_s, run_s = measure(loads, SETTINGS[name], args.repeats)
-            err = errors(values, reference)
+            # the finer run is the truth for the reference's own error
+            err = errors(reference, values) if name == FINER else errors(values, reference)
             rows.append({"case": case, "setting": name, "compile_s": compile_s, "run_s": run_s,
                          "run_fraction_of_reference": run_s / ref_run, "errors": err,
                          "values": values, "loads": [load[0] for load in loads]})
@@ -174,6 +184,51 @@ def main() -> None:
             # process that compiled ~30 large programs hit the kernel's map limit
             # (vm.max_map_count; LLVM "Cannot allocate memory", then a segfault).
             jax.clear_caches()
+
+
+LABELS = {"lte_pp_um": "LTE p-p", "lte_mean_um": "LTE mean", "stiffness": "stiffness", "load_share": "max load share",
+          "pressure_MPa": "max pressure", "impact_force_N": "F_s", "te_pp_um": "TE p-p"}
+
+
+def _percent(x: float) -> str:
+    if not math.isfinite(x):
+        return "failed"
+    if x < 1e-4:
+        return "< 0.01 %"
+    return f"{x * 100:.2g} %" if x < 0.1 else f"{x * 100:.0f} %"
+
+
+def markdown() -> None:
+    """The tables of docs/accuracy.md, one per case, from benchmarks/results/accuracy.json:
+    run time, its fraction of the reference's, compile time and the largest error of each
+    quantity over the case's loads. A quantity whose reference is below its floor at every
+    load (the unloaded TE of perfect flanks) is left out."""
+    import json
+    from pathlib import Path
+
+    rows = json.loads((Path(__file__).resolve().parent / "results" / "accuracy.json").read_text())["rows"]
+    for case in dict.fromkeys(r["case"] for r in rows):
+        order = list(SETTINGS)
+        mine = sorted((r for r in rows if r["case"] == case), key=lambda r: order.index(r["setting"]))
+        reference = next(r for r in mine if r["setting"] == "reference")["values"]
+        names = [n for n in QUANTITIES if any(v.get(n) is not None and abs(v[n]) >= FLOORS.get(n, 0.0) for v in reference)]
+        impact = "strike_point_mm" in reference[0]
+        head = ["setting", "run (ms)", "of reference", "compile (s)", *(LABELS[n] for n in names)]
+        head += ["strike point (mm)", "regime"] if impact else []
+        print(f"\n{case} ({', '.join(mine[0]['loads'])}):\n")
+        print("| " + " | ".join(head) + " |")
+        print("|" + "---|" + "---:|" * (len(head) - 1 - impact) + ("---|" if impact else ""))
+        for r in mine:
+            label = "`reference` against the finer run (its time: the finer run's)" if r["setting"] == FINER else r["setting"]
+            cells = [label, f"{r['run_s'] * 1e3:,.1f}".replace(",", " "), _percent(r["run_fraction_of_reference"]),
+                     f"{r['compile_s']:.0f}"]
+            if r["setting"] == "reference":
+                cells += ["—"] * (len(head) - len(cells))
+            else:
+                cells += [_percent(r["errors"].get(n, math.nan)) for n in names]
+                if impact:
+                    cells += [f"{r['errors']['strike_point_mm']:.2g}", "same" if r["errors"]["regime_equal"] else "differs"]
+            print("| " + " | ".join(cells) + " |")
 
 
 def plot() -> None:
@@ -195,7 +250,7 @@ def plot() -> None:
     colours = {}
     for ax, name in zip(axes.flat, names, strict=True):
         for row in rows:
-            if row["setting"] == "reference" or name not in row["errors"]:
+            if row["setting"] in ("reference", FINER) or name not in row["errors"]:
                 continue
             colour = colours.setdefault(row["case"], f"C{len(colours)}")
             error = max(row["errors"][name], 1e-9)
