@@ -223,17 +223,19 @@ def robust_design(args, base, space, single_load_optimum, paper) -> dict:
 
 def check_robust(args, robust: dict) -> None:
     """The robust comparison's designs at `--certify` with `--check-robust` face slices (4x
-    the preset's contact steps): mean and worst F_s, edge probability, into `robust["check"]`."""
+    the preset's contact steps; `--check-positions` positions per pitch if given): mean and
+    worst F_s, edge probability, into `robust["check"]`."""
     import equinox as eqx
 
     from gearjax.optimize.space import SCENE_KEYS
 
     errors = go.sample_errors(robust["samples"], misalignment=robust["misalignment_tolerance_um"] * 1e-3, seed=0)
     base = gj.Accuracy.preset(args.certify)
-    finer = base.replace(face_slices=args.check_robust, contact_max_steps=4 * base.contact_max_steps)
+    finer = base.replace(face_slices=args.check_robust, contact_max_steps=4 * base.contact_max_steps,
+                         positions_per_pitch=args.check_positions or base.positions_per_pitch)
     objective = go.Objective.create(scene(finer), torques_Nm=robust["loads_Nm"], errors=errors)
     evaluate_one = eqx.filter_jit(lambda o, d: o.batch(d))
-    check = {"face_slices": args.check_robust}
+    check = {"face_slices": finer.face_slices, "positions_per_pitch": finer.positions_per_pitch}
     for label, stats in robust["comparison"].items():
         design = [stats["design"][key] / factor for key, factor in SCENE_KEYS]  # mm, from the scene file's units
         ev = evaluate_one(objective, np.asarray(design, dtype=float)[None])
@@ -250,6 +252,8 @@ def main() -> None:
     parser.add_argument("--check-robust", type=int, default=0, metavar="SLICES",
                         help="only evaluate the robust comparison's designs stored in --out at --certify with "
                              "SLICES face slices (the check of the certification); adds 'check' to its 'robust' entry")
+    parser.add_argument("--check-positions", type=int, default=0,
+                        help="with --check-robust: positions per pitch of the check (default: the preset's)")
     parser.add_argument("--robust-only", action="store_true",
                         help="only the robust design, compared with the GA's 1000 N·m optimum stored in --out; "
                              "updates its 'robust' entry")
