@@ -35,6 +35,8 @@ jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
 
+import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
+
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
 from gearjax.papers.seed001 import (  # noqa: E402
@@ -231,8 +233,7 @@ def check_robust(args, robust: dict) -> None:
 
     errors = go.sample_errors(robust["samples"], misalignment=robust["misalignment_tolerance_um"] * 1e-3, seed=0)
     base = gj.Accuracy.preset(args.certify)
-    finer = base.replace(face_slices=args.check_robust, contact_max_steps=4 * base.contact_max_steps,
-                         positions_per_pitch=args.check_positions or base.positions_per_pitch)
+    finer = check_accuracy.finer(base, args.check_robust, args.check_positions)
     objective = go.Objective.create(scene(finer), torques_Nm=robust["loads_Nm"], errors=errors)
     evaluate_one = eqx.filter_jit(lambda o, d: o.batch(d))
     check = {"face_slices": finer.face_slices, "positions_per_pitch": finer.positions_per_pitch}

@@ -25,6 +25,8 @@ jax.config.update("jax_enable_x64", True)
 
 import jax.numpy as jnp  # noqa: E402
 
+import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
+
 import gearjax as gj  # noqa: E402
 from gearjax._solution import RESULTS  # noqa: E402
 from gearjax.papers.seed001 import TABLE4_IMPACT_FORCE, paper_optimum, seed_pair  # noqa: E402
@@ -77,8 +79,7 @@ def main(accuracy: str = "reference", check_slices: int = 161) -> dict:
     }
     check = None
     if check_slices:
-        # more slices need more active-set steps (each point that enters or leaves is one)
-        finer = acc.replace(face_slices=check_slices, contact_max_steps=4 * acc.contact_max_steps)
+        finer = check_accuracy.finer(acc, check_slices)
         differences, regimes_equal = [], True
         for row in table:
             for name, y in (("standard", plain), ("modified", paper)):

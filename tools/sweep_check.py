@@ -21,6 +21,8 @@ jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
 
+import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
+
 import gearjax as gj  # noqa: E402
 from gearjax.sweep_command import parse_list  # noqa: E402
 from gearjax.scene_file import default_scene  # noqa: E402
@@ -51,7 +53,7 @@ def main() -> None:
     torques, speeds = parse_list("--torque-Nm", args.torque_Nm), parse_list("--speed-rpm", args.speed_rpm)
     base = gj.Accuracy.preset(args.accuracy)
     a = sweep(base, torques, speeds)
-    b = sweep(base.replace(face_slices=args.check_slices, contact_max_steps=4 * base.contact_max_steps), torques, speeds)
+    b = sweep(check_accuracy.finer(base, args.check_slices), torques, speeds)
     difference = np.abs(a["force_N"] / b["force_N"] - 1.0)
     edge = a["regime"][:, 0] == "edge"
     result = {
