@@ -19,7 +19,7 @@ jax.config.update("jax_enable_x64", True)
 
 from _common import count_equations, machine, write  # noqa: E402
 
-from gearjax.scene import _prepare, _simulate  # noqa: E402
+from gearjax.pipeline import prepare, run  # noqa: E402
 from gearjax.scene_file import default_scene  # noqa: E402
 
 
@@ -34,9 +34,9 @@ def main() -> None:
         import dataclasses
 
         scene = dataclasses.replace(scene, accuracy=gearjax.Accuracy.preset(args.accuracy))
-    scene = _prepare(scene)
+    scene = prepare(scene)
     dynamic, static = eqx.partition(scene, eqx.is_array)
-    fn = jax.jit(lambda d: _simulate.__wrapped__(eqx.combine(d, static)))
+    fn = jax.jit(lambda d: run(eqx.combine(d, static)))
     t0 = time.perf_counter()
     traced = fn.trace(dynamic)
     t1 = time.perf_counter()

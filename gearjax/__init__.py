@@ -50,11 +50,13 @@ from .ltca import (
     SliceCompliance as SliceCompliance,
     loaded_contact_analysis as loaded_contact_analysis,
 )
+from .pipeline import (
+    SimulationResult as SimulationResult,
+    simulate as simulate,
+)
 from .scene import (
     OperatingPoint as OperatingPoint,
     Scene as Scene,
-    SimulationResult as SimulationResult,
-    simulate as simulate,
     stack_scenes as stack_scenes,
 )
 from .sweep import (

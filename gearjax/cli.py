@@ -129,7 +129,7 @@ def _caches(args: argparse.Namespace):
 
 def _run(args: argparse.Namespace) -> int:
     from .report import result_dict, summary
-    from .scene import simulate
+    from .pipeline import simulate
     from .papers.seed001 import SEED_001_NOTE
     from .scene_file import SceneFileError, default_scene, load_scene
 

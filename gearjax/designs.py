@@ -27,7 +27,8 @@ import numpy as np
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
 from .resources import check_memory
-from .scene import STAGES, Scene, SimulationResult, _check_codes, _check_modification_fits, _in_precision, _prepare, _simulate
+from .pipeline import STAGES, SimulationResult, check_codes, in_precision, precision, prepare, run
+from .scene import Scene, check_modification_fits
 
 #: The batched parts of a scene, by `simulate_designs` keyword.
 _PARTS = (("modifications", "modification", FlankModification),
@@ -99,17 +100,14 @@ def simulate_designs(
         raise ValueError(f"batch_size must be a positive integer or None; got {batch_size!r}")
     for gear, field in ((0, "modification"), (1, "gear_modification")):
         if field in batch:
-            _check_modification_fits(scene.pair, batch[field], gear, f"{field}s", _relief_coordinates)
+            check_modification_fits(scene.pair, batch[field], gear, f"{field}s", _relief_coordinates)
     check_memory(scene, what="simulate_designs", batch=min(count, batch_size or count))
-    scene = _prepare(scene)
-    batch = _in_precision(batch, scene.accuracy)
-    if scene.accuracy.dtype == "float32":
-        with jax.enable_x64(False):
-            out, codes = _simulate_designs(scene, batch, outputs, batch_size)
-    else:
+    scene = prepare(scene)
+    batch = in_precision(batch, scene.accuracy)
+    with precision(scene.accuracy):
         out, codes = _simulate_designs(scene, batch, outputs, batch_size)
     if throw:
-        _check_codes(codes)
+        check_codes(codes)
     return out
 
 
@@ -156,7 +154,7 @@ def _simulate_designs(scene: Scene, batch: dict, outputs, batch_size):
     """(outputs per design, result codes per stage and design) in one program."""
 
     def one(design):
-        result = _simulate(_with(scene, design))
+        result = run(_with(scene, design))
         codes = {stage: getattr(result, stage).result for stage in STAGES if getattr(result, stage) is not None}
         return (result if outputs is None else outputs(result)), codes
 

@@ -11,7 +11,8 @@ import math
 import numpy as np
 
 from ._solution import RESULTS, enum_message, enum_name
-from .scene import Scene, SimulationResult
+from .pipeline import SimulationResult
+from .scene import Scene
 from .tca import ContactKind
 from .units import UM_PER_MM, URAD_PER_RAD
 
@@ -105,7 +106,7 @@ def impact_dict(scene: Scene, result: SimulationResult) -> dict:
         "stiffness_exponent": _f(stiff.exponent),
         "stiffness_fit_error": _f(stiff.fit_error),
         "equivalent_mass_kg": _f(imp.mass) * 1e3,
-        "seed_equivalent_mass_kg": _f(imp.seed_mass) * 1e3,
+        "base_radius_equivalent_mass_kg": _f(imp.base_radius_mass) * 1e3,
         "approach_um": _f(imp.approach) * UM_PER_MM,
         "kinetic_energy_J": _f(imp.kinetic_energy) * 1e-3,
         "converged": bool(np.asarray(imp.result == RESULTS.successful)),

@@ -23,12 +23,14 @@ from ._custom_types import ArrayLike
 from ._numerics import as_float
 from ._solution import RESULTS, SimulationError, enum_name
 from ._validate import check_range
-from .impact import ImpactRegime, ImpactResult, impact_analysis
-from .ltca import LTCAResult, loaded_contact_analysis
+from . import pipeline
+from .impact import ImpactRegime, ImpactResult
+from .ltca import LTCAResult
 from .operating import _MAX_SPEED
+from .pipeline import SimulationResult, check_results, over_loads, precision, prepare
 from .resources import check_memory
-from .scene import Scene, SimulationResult, _check_results, _prepare, stack_scenes
-from .tca import TCAResult, tooth_contact_analysis
+from .scene import Scene, stack_scenes
+from .tca import TCAResult
 from .units import rad_per_s_to_rpm, rpm_to_rad_per_s
 
 
@@ -92,11 +94,9 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
     """
     torques = _torques(torques, torques_Nm)
     check_memory(scene, loads=torques.shape[0], what="load_sweep")
-    scene = _prepare(scene)
-    if scene.accuracy.dtype == "float32":
-        with jax.enable_x64(False):
-            return _load_sweep(scene, torques.astype("float32"))
-    return _load_sweep(scene, torques)
+    scene = prepare(scene)
+    with precision(scene.accuracy):
+        return _load_sweep(scene, torques.astype(jnp.result_type(float)))
 
 
 def _torques(torques, torques_Nm):
@@ -115,13 +115,8 @@ def _load_sweep(scene: Scene, torques) -> LoadSweep:
 
 
 def _load_sweep_body(scene: Scene, torques) -> LoadSweep:
-    pair = scene.pair.resolve()  # once, for the TCA and every load's LTCA
-    tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
-
-    def one(torque):
-        return loaded_contact_analysis(pair, tca, torque, scene.contact_model)
-
-    return LoadSweep(tca=tca, ltca=jax.vmap(one)(torques))
+    tca, ltca, _ = over_loads(scene, torques)
+    return LoadSweep(tca=tca, ltca=ltca)
 
 
 class ImpactSweep(eqx.Module):
@@ -189,9 +184,9 @@ def impact_sweep(
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
     check_memory(scene, loads=-(-torques.shape[0] // (1 if devices is None else len(devices))), what="impact_sweep")
-    scene = _prepare(scene)
+    scene = prepare(scene)
     count = torques.shape[0]
-    with _precision(scene):
+    with precision(scene.accuracy):
         dtype = jnp.result_type(float)
         torques, speeds = torques.astype(dtype), speeds.astype(dtype)
         if devices is None:
@@ -201,7 +196,7 @@ def impact_sweep(
                                                 batched=lambda sw: (sw.ltca, sw.impact))
             sweep = ImpactSweep(tca=first.tca, ltca=_rows(count, ltca), impact=_rows(count, impact), speed=speeds)
     if throw:
-        _check_results(SimulationResult(tca=sweep.tca, ltca=sweep.ltca, impact=sweep.impact))
+        check_results(SimulationResult(tca=sweep.tca, ltca=sweep.ltca, impact=sweep.impact))
     return sweep
 
 
@@ -211,18 +206,7 @@ def _impact_sweep(scene: Scene, torques, speeds) -> ImpactSweep:
 
 
 def _impact_sweep_body(scene: Scene, torques, speeds) -> ImpactSweep:
-    pair = scene.pair.resolve()
-    tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
-
-    def at_torque(torque):
-        ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
-
-        def at_speed(speed):
-            return _impact(scene, pair, tca, ltca, torque, speed)
-
-        return ltca, jax.vmap(at_speed)(speeds)
-
-    ltca, impact = jax.vmap(at_torque)(torques)
+    tca, ltca, impact = over_loads(scene, torques, speeds)
     return ImpactSweep(tca=tca, ltca=ltca, impact=impact, speed=speeds)
 
 
@@ -305,10 +289,10 @@ def design_sweep(
         raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
     check_memory(stacked, loads=torques.shape[0], what="design_sweep")
-    stacked = _prepare(stacked)
+    stacked = prepare(stacked)
     arrays, static = eqx.partition(stacked, eqx.is_array)
     count = jax.tree_util.tree_leaves(arrays)[0].shape[0]
-    with _precision(stacked):
+    with precision(stacked.accuracy):
         dtype = jnp.result_type(float)
         torques = torques.astype(dtype)
         speeds = None if speeds is None else speeds.astype(dtype)
@@ -320,17 +304,14 @@ def design_sweep(
             ltca, impact = _rows(count, (ltca, impact))
     sweep = DesignSweep(ltca=ltca, impact=impact, torque=torques, speed=speeds)
     if throw:
-        _check_results(SimulationResult(tca=None, ltca=sweep.ltca, impact=sweep.impact))
+        check_results(SimulationResult(tca=None, ltca=sweep.ltca, impact=sweep.impact))
     return sweep
 
 
 def _design_rows_body(arrays, static, torques, speeds):
     def one(design_arrays):
-        scene = eqx.combine(design_arrays, static)
-        if speeds is None:
-            return _load_sweep_body(scene, torques).ltca, None
-        sweep = _impact_sweep_body(scene, torques, speeds)
-        return sweep.ltca, sweep.impact
+        _, ltca, impact = over_loads(eqx.combine(design_arrays, static), torques, speeds)
+        return ltca, impact
 
     return jax.lax.map(one, arrays)
 
@@ -428,13 +409,6 @@ def _devices(devices):
     return devices
 
 
-def _precision(scene: Scene):
-    """64-bit types off while a float32 scene is traced (as `simulate`)."""
-    import contextlib
-
-    return jax.enable_x64(False) if scene.accuracy.dtype == "float32" else contextlib.nullcontext()
-
-
 def regime_transition(
     scene: Scene | list[Scene],
     low: float | None = None,
@@ -492,9 +466,9 @@ def regime_transition(
         raise ValueError("scene must be a Scene or a non-empty list of Scene objects")
     if any("impact" not in sc.effects for sc in scenes):
         raise ValueError("regime_transition needs a scene with effects including 'impact'")
-    stacked = _prepare(stack_scenes(scenes))
+    stacked = prepare(stack_scenes(scenes))
     arrays, static = eqx.partition(stacked, eqx.is_array)
-    with _precision(stacked):
+    with precision(stacked.accuracy):
         dtype = jnp.result_type(float)
         search = _transition(arrays, static, jnp.asarray(low, dtype), jnp.asarray(high, dtype),
                              jnp.asarray(tolerance, dtype))
@@ -522,12 +496,6 @@ def regime_transition(
     return np.where(found, below, np.nan), np.where(found, above, np.nan)
 
 
-def _impact(scene: Scene, pair, tca, ltca, torque, speed) -> ImpactResult:
-    """The impact stage of a resolved pair at one torque and speed (as `simulate`)."""
-    return impact_analysis(pair, scene.depth, tca, ltca, torque=torque, speed=speed,
-                           model=scene.contact_model, pairs=scene.pairs, inertia=scene.inertia)
-
-
 #: Most steps of one bisection (the two end checks included); 2^-62 of the first bracket.
 _MAX_BISECTION_STEPS = 64
 
@@ -541,7 +509,8 @@ def _transition(arrays, static, low, high, tolerance):
     def one(design_arrays):
         scene = eqx.combine(design_arrays, static)
         pair = scene.pair.resolve()
-        tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+        tca = pipeline.unloaded(scene, pair, pipeline.input_checks(scene, pair))
+
         def running(c):
             step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
             sound = (ltca_code == RESULTS.successful) & (impact_code == RESULTS.successful)
@@ -551,8 +520,10 @@ def _transition(arrays, static, low, high, tolerance):
         def bisect(c):
             step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
             torque = jnp.where(step == 0, low, jnp.where(step == 1, high, 0.5 * (lo + hi)))
-            ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
-            impact = _impact(scene, pair, tca, ltca, torque, scene.operating.speed)
+            speed = scene.operating.speed
+            checks = pipeline.input_checks(scene, pair, torque, speed)
+            ltca = pipeline.loaded(scene, pair, tca, torque, checks)
+            impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
             edge = impact.regime == ImpactRegime.edge
             middle = step >= 2
             lo = jnp.where(middle & ~edge, torque, lo)

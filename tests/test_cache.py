@@ -18,7 +18,7 @@ import pytest
 import gearjax as gj
 from gearjax import _program_key, program_cache
 from gearjax._runtime import gradient_cache_safe
-from gearjax.scene import _prepare, _simulate
+from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
 
 SCENE = """\
 [pair]
@@ -167,7 +167,7 @@ KEY_PROBE = textwrap.dedent(
     jax.config.update("jax_enable_x64", True)
     import gearjax as gj
     from gearjax import program_cache
-    from gearjax.scene import _prepare, _simulate
+    from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
     pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 20.0)
     scene = _prepare(gj.Scene(pair, operating=gj.OperatingPoint(torque=100e3), effects=("impact",), accuracy="fast"))
     leaves, treedef = jax.tree_util.tree_flatten(scene)

@@ -183,7 +183,7 @@ def test_equivalent_mass_reduces_to_the_seed_form_on_the_line_of_action(seed_pai
         s1, s2 = w1 - impulse * rb1 / j1, w2 + impulse * rb2 / j2
         return rb1 * s1 - rb2 * s2, 0.5 * j1 * s1**2 + 0.5 * j2 * s2**2
 
-    assert float(imp.seed_mass) == pytest.approx(plastic_mass(seed_after), rel=1e-10)
+    assert float(imp.base_radius_mass) == pytest.approx(plastic_mass(seed_after), rel=1e-10)
     # Ours: the impulse acts along the normal at M; spins, velocities and torques from 3-D
     # cross products.
     x, n = np.asarray(imp.pinion_point), np.asarray(imp.normal)
@@ -210,7 +210,7 @@ def test_equivalent_mass_reduces_to_the_seed_form_on_the_line_of_action(seed_pai
     assert flank.regime_name == "surface"
     assert abs(float(flank.pinion_arm)) == pytest.approx(rb1 * cb, rel=5e-3)
     assert abs(float(flank.gear_arm)) == pytest.approx(rb2 * cb, rel=5e-3)
-    assert float(flank.mass) == pytest.approx(float(flank.seed_mass) / cb**2, rel=1e-2)
+    assert float(flank.mass) == pytest.approx(float(flank.base_radius_mass) / cb**2, rel=1e-2)
 
 
 def test_general_search_agrees_with_the_closed_form_edge_equation(seed_pair):
@@ -281,7 +281,7 @@ def test_first_contact_leaves_no_overlap_anywhere_on_the_face(seed_pair):
     flank at 21 slices and found a later flank contact."""
     imp = impact(seed_pair, NARROW_EDGE, 1000.0)
     assert gj.enum_name(imp.result) == "successful"
-    sc = gj.scene._prepare(scene(seed_pair, NARROW_EDGE, 1000.0))
+    sc = gj.pipeline.prepare(scene(seed_pair, NARROW_EDGE, 1000.0))
     fine = eqx.filter_jit(gj.tooth_contact_analysis)(
         sc.pair, sc.depth, accuracy=ACC.replace(face_slices=401), pairs=sc.pairs,
         pinion_angles=jnp.asarray([imp.pinion_angle]))

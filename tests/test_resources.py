@@ -7,13 +7,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-import gearjax.scene
+import gearjax.pipeline
 import gearjax.sweep
 from gearjax import Accuracy, OperatingPoint, Scene, simulate
 from gearjax.cli import main
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.resources import MemoryEstimateError, check_memory, estimate_bytes
-from gearjax.scene import _prepare, _simulate
+from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
 from gearjax.scene_file import DEFAULT_SCENE_TOML
 from gearjax.sweep import load_sweep
 
@@ -21,7 +21,7 @@ from gearjax.sweep import load_sweep
 @pytest.fixture
 def no_compute(forbid):
     """Fail if anything is compiled before the memory check."""
-    forbid(gearjax.scene, "_simulate")
+    forbid(gearjax.pipeline, "simulate_program")
     forbid(gearjax.sweep, "_load_sweep")
 
 

@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 
 import gearjax as gj
+from gearjax import pipeline
 from gearjax._solution import RESULTS, SimulationError, enum_message, enum_name
 from gearjax.ltca import IsoCompliance
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.scene import _check_results, program_text
+from gearjax.pipeline import check_results as _check_results, program_text
 from gearjax.tca import ContactKind
 from gearjax.tca._slice import CANDIDATES, contact_kind
 
@@ -173,3 +174,32 @@ def test_out_of_range_traced_inputs_give_nan_and_a_named_code(seed_pair):
     with pytest.raises(SimulationError, match="invalid_modification") as info:
         _check_results(bad)
     assert info.value.stage == "tca"
+
+
+def test_the_sweeps_chain_guards_traced_inputs_per_load(seed_pair):
+    """The chain the sweeps, the design rows and the objective run (`pipeline.over_loads`,
+    `unloaded`/`loaded`/`impact`) guards traced inputs as `simulate` does: y6 = b gives NaN
+    and `invalid_modification` at every load, and a negative torque among valid ones names
+    `invalid_operating_point` at that load only, leaving the others' numbers alone."""
+    b = float(seed_pair.face_width)
+    pairs = gj.Scene(seed_pair, accuracy=TINY).pairs
+
+    @jax.jit
+    def run(y, torques):
+        scene = gj.Scene(seed_pair, gj.FlankModification.from_vector(y), operating=gj.OperatingPoint(torque=1.0e6),
+                         accuracy=TINY, pairs=pairs)
+        tca, ltca, impact = pipeline.over_loads(scene, torques)
+        assert impact is None
+        return tca.result, ltca.result, ltca.transmission_error
+
+    good = jnp.asarray(paper_optimum().as_vector())
+    tca_code, ltca_code, lte = run(good, jnp.asarray([1.0e6, -1.0]))
+    assert enum_name(tca_code) == "successful"
+    assert enum_name(ltca_code).tolist() == ["successful", "invalid_operating_point"]
+    concrete = gj.simulate(_loaded(seed_pair)).ltca.transmission_error
+    np.testing.assert_allclose(np.asarray(lte[0]), np.asarray(concrete), rtol=1e-10)
+    assert np.isnan(np.asarray(lte[1])).all()
+    tca_code, ltca_code, lte = run(good.at[5].set(b), jnp.asarray([1.0e6, 2.0e6]))
+    assert enum_name(tca_code) == "invalid_modification"
+    assert enum_name(ltca_code).tolist() == ["invalid_modification"] * 2
+    assert np.isnan(np.asarray(lte)).all()

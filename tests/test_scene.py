@@ -6,7 +6,7 @@ import jax
 import numpy as np
 import pytest
 
-import gearjax.scene
+import gearjax.pipeline
 from gearjax import (
     Accuracy,
     FlankModification,
@@ -17,7 +17,8 @@ from gearjax import (
     simulate,
 )
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.scene import program_text, stack_scenes
+from gearjax.pipeline import program_text
+from gearjax.scene import stack_scenes
 
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)
 
@@ -50,14 +51,14 @@ def test_loaded_scene_builds_the_ltca_stage(seed_pair):
 
 def test_simulate_does_not_retrace_for_new_values(seed_pair, monkeypatch):
     calls = []
-    original = gearjax.scene.tooth_contact_analysis
+    original = gearjax.pipeline.tooth_contact_analysis
 
     def counting(*args, **kwargs):
         calls.append(1)
         return original(*args, **kwargs)
 
     jax.clear_caches()
-    monkeypatch.setattr(gearjax.scene, "tooth_contact_analysis", counting)
+    monkeypatch.setattr(gearjax.pipeline, "tooth_contact_analysis", counting)
     for amount in (0.004, 0.009):
         scene = Scene(seed_pair, FlankModification(tip_relief=amount, tip_relief_length=4.0), accuracy=TINY)
         simulate(scene).tca.transmission_error.block_until_ready()

@@ -146,13 +146,12 @@ def test_scene_effects_are_checked(seed_pair):
 
 
 def test_float64_request_without_x64_is_explained(seed_pair, monkeypatch):
-    import gearjax.scene
+    import gearjax.pipeline
 
     scene = Scene(seed_pair)
-    monkeypatch.setattr(gearjax.scene, "_x64_enabled", lambda: False)
-    _prepare = gearjax.scene._prepare
+    monkeypatch.setattr(gearjax.pipeline, "_x64_enabled", lambda: False)
     with pytest.raises(ValueError, match="jax_enable_x64"):
-        _prepare(scene)
+        gearjax.pipeline.prepare(scene)
 
 
 def test_batched_inputs_are_checked_elementwise():

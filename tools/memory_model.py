@@ -24,7 +24,7 @@ import jax
 jax.config.update("jax_enable_x64", True)
 import gearjax as gj
 from gearjax.resources import estimate_bytes
-from gearjax.scene import _prepare, _simulate
+from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
 from gearjax.scene_file import default_scene
 scene, _ = default_scene()
 scene = dataclasses.replace(scene, effects=frozenset({"ltca"}),

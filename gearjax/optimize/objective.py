@@ -39,10 +39,9 @@ from .._solution import RESULTS
 from .._validate import check_choice, check_int, check_range
 from ..geometry.errors import MeshErrors
 from ..geometry.modification import FlankModification
-from ..impact import ImpactRegime, impact_analysis
-from ..ltca import loaded_contact_analysis
-from ..scene import Scene, _prepare
-from ..tca import tooth_contact_analysis
+from .. import pipeline
+from ..impact import ImpactRegime
+from ..scene import Scene
 from .space import modification_from_design
 
 QUANTITIES = ("force", "velocity")
@@ -193,7 +192,7 @@ class Objective(eqx.Module):
             raise ValueError("errors must be a MeshErrors with one leading sample axis (see sample_errors)")
         if scene.errors is None:  # the samples replace the errors: the scene needs the slot
             scene = dataclasses.replace(scene, errors=MeshErrors())
-        scene = _prepare(scene)
+        scene = pipeline.prepare(scene)
         dtype = jnp.float32 if scene.accuracy.dtype == "float32" else jnp.float64
         errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), errors)
         return cls(scene, jnp.asarray(values, dtype), jnp.asarray(w, dtype), errors, quantity, aggregate,
@@ -219,15 +218,13 @@ class Objective(eqx.Module):
         def per_sample(errors):
             scene = self.scene_for(design, errors=errors)
             pair = scene.pair.resolve()
-            model = scene.contact_model
-            tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs, pitches=scene.pitches)
+            tca = pipeline.unloaded(scene, pair, pipeline.input_checks(scene, pair))
 
             def per_load(torque):
-                ltca = loaded_contact_analysis(pair, tca, torque, model)
-                impact = impact_analysis(
-                    pair, scene.depth, tca, ltca, torque=torque, speed=scene.operating.speed,
-                    model=model, pairs=scene.pairs, inertia=scene.inertia,
-                )
+                speed = scene.operating.speed
+                checks = pipeline.input_checks(scene, pair, torque, speed)
+                ltca = pipeline.loaded(scene, pair, tca, torque, checks)
+                impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
                 ok = (impact.result == RESULTS.successful) & (ltca.result == RESULTS.successful)
                 return (
                     impact.force,
