@@ -23,7 +23,7 @@ SEED_TEETH = (29, 71)
 SEED_TORQUE_NM = 1000.0  # seed 001's middle load, N·m (its design load)
 SPEED = 1000.0 * 2.0 * math.pi / 60.0  # rad/s, seed 001's 1000 rpm
 PAPER_UM = np.array(TABLE2_OPTIMUM_UM)
-# DesignSpace.seed001: amounts [0.001, 0.015] m_n, relief lengths [0.1, 0.8] m_n, y6 in [0, 0.5 b]
+# DesignSpace.module_scaled: amounts [0.001, 0.015] m_n, relief lengths [0.1, 0.8] m_n, y6 in [0, 0.5 b]
 LOWER = np.array([0.001, 0.001, 0.1, 0.1, 0.001, 0.0])
 UPPER = np.array([0.015, 0.015, 0.8, 0.8, 0.015, 0.5])
 
@@ -128,7 +128,7 @@ def missed_contacts(result, i=None) -> int:
 
 def _loaded(rng, pair, module, face_width):
     """`(pair, y (mm), scene keywords)`: a modification uniform within
-    `DesignSpace.seed001`'s bounds (relief lengths capped at the active flank), f_pb and f_p
+    `DesignSpace.module_scaled`'s bounds (relief lengths capped at the active flank), f_pb and f_p
     within ±0.001 m_n (ISO 1328 grades 5-7 at these modules), f_ma within ±0.002 b (mm),
     and a torque up to twice the seed's 1000 N·m scaled to the same line load and pitch
     radius ($T \\propto z_1 m_n^2 b$)."""

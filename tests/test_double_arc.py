@@ -9,7 +9,7 @@ import pytest
 
 from gearjax.geometry.double_arc import GBT12759Rack
 from gearjax.impact.energy import impact_force as energy_impact_force
-from gearjax.impact.energy import seed_equivalent_mass
+from gearjax.impact.energy import base_radius_equivalent_mass
 from gearjax.papers.double_arc import SEED_TABLES, axial_meshing, formula7_impact_force, seed_tables
 
 
@@ -66,7 +66,7 @@ def test_formula_7_is_the_energy_method_for_a_linear_contact():
     spring, 1/2 m v^2 = 1/2 F^2/K, i.e. `gearjax.impact.energy.impact_force` with n = 1."""
     inertia, radii = jnp.asarray([3e-3, 7e-3]), jnp.asarray([40.0, 65.0])
     ours = formula7_impact_force(50.0, 2e5, 1, inertia, radii, 0.0)
-    force, _ = energy_impact_force(seed_equivalent_mass(inertia, radii), 50.0, 2e5, 1.0)
+    force, _ = energy_impact_force(base_radius_equivalent_mass(inertia, radii), 50.0, 2e5, 1.0)
     assert float(ours) == pytest.approx(float(force), rel=1e-12)
 
 

@@ -221,7 +221,7 @@ RANDOM_KNOWN = {}
 def test_random_designs_are_finite_and_converged(random_failures, kind):
     """400 random valid involute designs on 29/71 (`_cases.random_involute`, seeded: module
     1-10 mm, β 0-40° with one in eight spur, α_n, shifts, face width, addendum, modification
-    within `DesignSpace.seed001`, mesh errors and torque; TCA, LTCA, impact): every output
+    within `DesignSpace.module_scaled`, mesh errors and torque; TCA, LTCA, impact): every output
     finite, every solve converged, one kind of failure per test."""
     failed = random_failures["seed_29_71"][kind]
     assert failed == [], f"{len(failed)} of {RANDOM} designs: {failed}"

@@ -94,6 +94,9 @@ def test_scene_checks_declared_stages():
     assert pair.supported_effects == frozenset()
     with pytest.raises(ValueError, match="not available for DoubleArcGearPair.*four_state.*four-state"):
         gj.Scene(pair, effects=("ltca",), operating=gj.OperatingPoint(torque=1.0e5))
+    # the stage itself reads the same declaration (it refuses before using its other inputs)
+    with pytest.raises(ValueError, match="DoubleArcGearPair supports the rigid TCA only"):
+        gj.loaded_contact_analysis(pair, None, 1.0e5, None)
 
 
 def test_any_abstract_compliance_is_accepted_and_others_refused(spur_pair):

@@ -2,9 +2,9 @@
 
 from .analysis import ImpactRegime as ImpactRegime, ImpactResult as ImpactResult, impact_analysis as impact_analysis
 from .energy import (
+    base_radius_equivalent_mass as base_radius_equivalent_mass,
     equivalent_mass as equivalent_mass,
     gear_inertia as gear_inertia,
     impact_force as impact_force,
-    seed_equivalent_mass as seed_equivalent_mass,
 )
 from .stiffness import LocalStiffness as LocalStiffness, local_stiffness as local_stiffness

@@ -75,7 +75,7 @@ from ..ltca.model import ContactModel
 from ..tca import ContactKind, TCAResult, tooth_contact_analysis
 from ..tca._slice import contact_kind
 from ..tca.face_peak import FacePeak, face_peak
-from .energy import equivalent_mass, gear_inertia, impact_force, seed_equivalent_mass
+from .energy import base_radius_equivalent_mass, equivalent_mass, gear_inertia, impact_force
 from .stiffness import LocalStiffness, local_stiffness
 
 
@@ -119,7 +119,8 @@ class ImpactResult(eqx.Module):
         pinion_arm, gear_arm: moment arms $p$, $q$ of the normal (mm).
         inertia: $(J_1, J_2)$ (t·mm²).
         mass: equivalent mass $m_{eq}$ (t).
-        seed_mass: seed 001's $m_{eq}$ with base radii as arms (t).
+        base_radius_mass: $m_{eq}$ with the base radii as arms and no helix factor, the
+            form of the mesh-in impact paper (`base_radius_equivalent_mass`; t).
         stiffness: `LocalStiffness` ($K_s$, $n$, curve).
         force: peak impact force $F_s$ (N).
         approach: peak approach $\\delta_s$ (mm).
@@ -149,7 +150,7 @@ class ImpactResult(eqx.Module):
     gear_arm: Scalar
     inertia: Float[Array, "2"]
     mass: Scalar
-    seed_mass: Scalar
+    base_radius_mass: Scalar
     stiffness: LocalStiffness
     force: Scalar
     approach: Scalar
@@ -512,7 +513,7 @@ def _impact_at(ctx: _Context, column, search: _Search, speed, inertia, found) ->
         gear_arm=q_arm,
         inertia=inertia,
         mass=mass,
-        seed_mass=seed_equivalent_mass(inertia, radii),
+        base_radius_mass=base_radius_equivalent_mass(inertia, radii),
         stiffness=fit,
         force=force,
         approach=approach,

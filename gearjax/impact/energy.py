@@ -11,7 +11,7 @@ Units: mm, N, s, t (tonne), so inertia is in t·mm², mass in t, energy in N·mm
   $m_{eq} = 1/(p^2/J_1 + q^2/J_2)$. On the line of action of a helical pair
   $p = r_{b1}\cos\beta_b$, $q = r_{b2}\cos\beta_b$; seed 001's
   $m_{eq} = J_1J_2/(J_1r_{b2}^2 + J_2r_{b1}^2)$ uses $r_{bi}$ (no $\cos\beta_b$) and is
-  kept as a cross-check (`seed_equivalent_mass`).
+  kept as a cross-check (`base_radius_equivalent_mass`).
 * Energy method: all kinetic energy $\tfrac12 m_{eq}v_n^2$ goes into the strain energy
   $\int_0^{\delta_s}K_s\delta^n\,\mathrm d\delta = K_s\delta_s^{n+1}/(n+1)$, so
   $\delta_s = ((n+1)m_{eq}v_n^2/(2K_s))^{1/(n+1)}$ and
@@ -37,8 +37,9 @@ def equivalent_mass(inertia, pinion_arm, gear_arm) -> Array:
     return 1.0 / (pinion_arm**2 / inertia[..., 0] + gear_arm**2 / inertia[..., 1])
 
 
-def seed_equivalent_mass(inertia, base_radius) -> Array:
-    """Seed 001's $m_{eq} = J_1J_2/(J_1r_{b2}^2 + J_2r_{b1}^2)$ (t)."""
+def base_radius_equivalent_mass(inertia, base_radius) -> Array:
+    """$m_{eq} = J_1J_2/(J_1r_{b2}^2 + J_2r_{b1}^2)$ (t): the base radii as the normal's
+    arms, without $\\cos\\beta_b$ (the mesh-in impact paper's form, seed 001)."""
     j1, j2 = inertia[..., 0], inertia[..., 1]
     return j1 * j2 / (j1 * base_radius[..., 1] ** 2 + j2 * base_radius[..., 0] ** 2)
 

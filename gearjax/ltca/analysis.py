@@ -26,16 +26,10 @@ import jax.numpy as jnp
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide, safe_sqrt
 from .._solution import RESULTS, first_failure
-from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import ContactKind, TCAResult
 from ..units import Material
 from .model import ContactModel
 from .solver import NO_CONTACT, ContactProblem, solve_with
-
-#: Families the LTCA supports: line contact of involute sections, whose transverse radius
-#: of curvature at roll length $s$ is $s$ itself (used for the Hertz pressure).
-LTCA_FAMILIES = (AbstractInvolutePair,)
-
 
 class LTCAResult(eqx.Module):
     """Loaded contact over a mesh cycle. Axes: position, pair, slice (midpoints only).
@@ -227,7 +221,9 @@ def loaded_contact_analysis(
     """LTCA of `pair` at pinion torque `torque` (N·mm) on the positions of `tca`.
 
     Args:
-        pair: the gear pair, of a family in `LTCA_FAMILIES` (involute sections).
+        pair: the gear pair, of a family with "ltca" in its `supported_effects` (line
+            contact of involute sections, whose transverse radius of curvature at roll
+            length $s$ is $s$ itself, used for the Hertz pressure).
         tca: its unloaded contact (`tooth_contact_analysis`).
         torque: pinion torque (N·mm), scalar; `vmap` for several loads.
         model: compliance, material, hub radii, accuracy and `extended_contact`
@@ -241,10 +237,10 @@ def loaded_contact_analysis(
         rates: also compute $\\mathrm d\\Theta/\\mathrm dT$ (tangent mesh stiffness); without
             it `rotation_rate` is None and the program is smaller.
     """
-    if not isinstance(pair, LTCA_FAMILIES):
+    if "ltca" not in pair.supported_effects:
         raise ValueError(
-            f"loaded contact analysis supports {', '.join(f.__name__ for f in LTCA_FAMILIES)} pairs "
-            f"(line contact of involute sections); got {type(pair).__name__}"
+            f"loaded contact analysis needs a family that supports it ('ltca' in supported_effects); "
+            f"{type(pair).__name__} supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
         )
     pair = pair.resolve()
     n_mid = model.accuracy.face_slices

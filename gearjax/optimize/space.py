@@ -42,7 +42,7 @@ SCENE_KEYS = (
 )
 
 #: Seed 001's bounds as multiples of (m_n, m_n, m_n, m_n, m_n, b).
-_SEED_BOUNDS = ((0.001, 0.015), (0.001, 0.015), (0.1, 0.8), (0.1, 0.8), (0.001, 0.015), (0.0, 0.5))
+_MODULE_BOUNDS = ((0.001, 0.015), (0.001, 0.015), (0.1, 0.8), (0.1, 0.8), (0.001, 0.015), (0.0, 0.5))
 
 
 class DesignSpace(eqx.Module):
@@ -78,15 +78,15 @@ class DesignSpace(eqx.Module):
         self.upper = jnp.asarray(upper)
 
     @classmethod
-    def seed001(cls, normal_module: float, face_width: float, **overrides) -> DesignSpace:
+    def module_scaled(cls, normal_module: float, face_width: float, **overrides) -> DesignSpace:
         """Seed 001's bounds for a pair of normal module $m_n$ and face width $b$ (mm):
         amounts $[0.001, 0.015]\\,m_n$, lengths $[0.1, 0.8]\\,m_n$, $y_6 \\in [0, 0.5\\,b]$.
 
         `overrides` replace single bounds by parameter name, as (lower, upper) in mm, e.g.
         `tip_relief_length=(0.5, 4.5)`."""
         scale = (normal_module,) * 5 + (face_width,)
-        lower = [lo * s for (lo, _), s in zip(_SEED_BOUNDS, scale)]
-        upper = [hi * s for (_, hi), s in zip(_SEED_BOUNDS, scale)]
+        lower = [lo * s for (lo, _), s in zip(_MODULE_BOUNDS, scale)]
+        upper = [hi * s for (_, hi), s in zip(_MODULE_BOUNDS, scale)]
         for name, bound in overrides.items():
             if name not in PARAMETERS:
                 raise ValueError(f"unknown design parameter {name!r}; known: {', '.join(PARAMETERS)}")
@@ -100,7 +100,7 @@ class DesignSpace(eqx.Module):
     def for_scene(cls, scene, **overrides) -> DesignSpace:
         """Seed 001's bounds for the scene's pair, checked against its flank (`check_fits`)."""
         pair = scene.pair
-        space = cls.seed001(float(np.min(pair.normal_module)), float(np.min(pair.face_width)), **overrides)
+        space = cls.module_scaled(float(np.min(pair.normal_module)), float(np.min(pair.face_width)), **overrides)
         space.check_fits(scene)
         return space
 
