@@ -39,7 +39,7 @@ from _common import machine, write  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
-from gearjax.report import result_dict  # noqa: E402
+from gearjax.io.report import result_dict  # noqa: E402
 
 #: Quantity name -> path in `result_dict`.
 QUANTITIES = {

@@ -3,7 +3,7 @@
     python benchmarks/baseline_scipy.py [--repeats 5] [--quick] [--growth]
                                         [--problems tca ltca_iso ltca_slice ltca_palmgren]
 
-The scene is the built-in default one (`gearjax.scene_file.default_scene()`: seed 001's
+The scene is the built-in default one (`gearjax.io.scene_file.default_scene()`: seed 001's
 29/71 helical pair with the paper's optimal modification); every problem uses the
 plane-of-action TCA (`Accuracy(tca_method="plane_of_action")`). Each baseline solves the
 same discrete problem as gearjax, and its results are checked against gearjax's before
@@ -75,7 +75,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import first_and_runs, machine, time_compiled_output, time_host, write  # noqa: E402
 from tca import random_designs  # noqa: E402
 
-from gearjax.scene_file import default_scene  # noqa: E402
+from gearjax.io.scene_file import default_scene  # noqa: E402
 
 #: Sizes of the full run and of `--quick` (a smoke test, not a measurement).
 FULL = {

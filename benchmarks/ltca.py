@@ -27,7 +27,7 @@ jax.config.update("jax_enable_x64", True)
 
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum  # noqa: E402
-from gearjax.sweep import _load_sweep  # noqa: E402
+from gearjax.sweep.loads import _load_sweep  # noqa: E402
 
 
 def main(argv=None):

@@ -34,7 +34,7 @@ from _common import first_and_runs, machine, write  # noqa: E402
 from gearjax.ltca import analysis as ltca_analysis  # noqa: E402
 from gearjax.ltca.compliance import pasternak_compliance  # noqa: E402
 from gearjax.ltca.solver import NO_CONTACT, ContactProblem, solve_with  # noqa: E402
-from gearjax.scene_file import default_scene  # noqa: E402
+from gearjax.io.scene_file import default_scene  # noqa: E402
 
 
 def median_time(fn, *args, repeats):

@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import gearjax as gj  # before the first computation: its process settings (gearjax._runtime)
+import gearjax as gj  # before the first computation: its process settings (gearjax.runtime.versions)
 import jax
 import numpy as np
 
@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import first_and_runs, machine, write  # noqa: E402
 from tca import random_designs  # noqa: E402
 
-from gearjax.scene_file import default_scene  # noqa: E402
+from gearjax.io.scene_file import default_scene  # noqa: E402
 
 
 def te_batched(repeats):

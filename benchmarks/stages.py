@@ -3,7 +3,7 @@
     python benchmarks/stages.py [--repeats 3] [--quick] [--accuracy fast|default|reference]
                                 [--stages ...] [--no-cli]
 
-Stages: the built-in default scene (`gearjax.scene_file.default_scene()`: seed 001 pair,
+Stages: the built-in default scene (`gearjax.io.scene_file.default_scene()`: seed 001 pair,
 paper optimum, 1000 N·m, 5000 rpm) with its effects and compliance chosen so that
 `gj.simulate` runs up to the stage measured:
 
@@ -73,7 +73,7 @@ TAG = "STAGE_RESULT "
 def stage_scene(stage: str, accuracy: str):
     """The default scene, set up so that `simulate` runs up to `stage`."""
     import gearjax as gj
-    from gearjax.scene_file import default_scene
+    from gearjax.io.scene_file import default_scene
 
     scene, _ = default_scene()
     acc = scene.accuracy if accuracy == "default" else gj.Accuracy.preset(accuracy)
@@ -184,7 +184,7 @@ def measure_cli(repeats: int, quick: bool) -> dict:
     with tempfile.TemporaryDirectory(prefix="gearjax_stages_") as tmp:
         scene_file = None
         if quick:
-            from gearjax.scene_file import DEFAULT_SCENE_TOML
+            from gearjax.io.scene_file import DEFAULT_SCENE_TOML
 
             text = DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"')
             if text == DEFAULT_SCENE_TOML:

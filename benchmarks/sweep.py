@@ -33,8 +33,10 @@ from _common import machine, time_compiled_output, write  # noqa: E402
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 from gearjax.pipeline import prepare as _prepare  # noqa: E402
-from gearjax.sweep import _design_sweep, _impact_sweep, _transition  # noqa: E402
-from gearjax.sweep_run import run_impact_sweep  # noqa: E402
+from gearjax.sweep.designs import _design_sweep  # noqa: E402
+from gearjax.sweep.loads import _impact_sweep  # noqa: E402
+from gearjax.sweep.transition import _transition  # noqa: E402
+from gearjax.sweep.run import run_impact_sweep  # noqa: E402
 from gearjax.units import rpm_to_rad_per_s  # noqa: E402
 
 

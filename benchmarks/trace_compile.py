@@ -20,7 +20,7 @@ jax.config.update("jax_enable_x64", True)
 from _common import count_equations, machine, write  # noqa: E402
 
 from gearjax.pipeline import prepare, run  # noqa: E402
-from gearjax.scene_file import default_scene  # noqa: E402
+from gearjax.io.scene_file import default_scene  # noqa: E402
 
 
 def main() -> None:

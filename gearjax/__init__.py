@@ -6,10 +6,10 @@ stage is a pure function of `equinox.Module` pytrees, so the chain can be `jit`-
 reference precision, needs `jax.config.update("jax_enable_x64", True)` at start-up. With
 jaxlib >= 0.12 importing it changes nothing in the process; older jaxlib versions get
 their workarounds (environment variables read when JAX's CPU backend starts), see
-`gearjax._runtime`.
+`gearjax.runtime.versions`.
 """
 
-from ._runtime import configure as _configure_runtime
+from .runtime.versions import configure as _configure_runtime
 
 _configure_runtime()
 
@@ -21,8 +21,8 @@ from ._solution import (
     enum_name as enum_name,
 )
 from .accuracy import Accuracy as Accuracy
-from .cache import enable_compilation_cache as enable_compilation_cache
-from .cache import exclude_from_persistent_cache as exclude_from_persistent_cache
+from .runtime.cache import enable_compilation_cache as enable_compilation_cache
+from .runtime.cache import exclude_from_persistent_cache as exclude_from_persistent_cache
 from .geometry import (
     AbstractFlankPair as AbstractFlankPair,
     AbstractGearPair as AbstractGearPair,

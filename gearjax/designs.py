@@ -26,7 +26,7 @@ import numpy as np
 
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
-from .resources import check_memory
+from .runtime.resources import check_memory
 from .pipeline import STAGES, SimulationResult, check_codes, in_precision, precision, prepare, run
 from .scene import Scene, check_modification_fits
 

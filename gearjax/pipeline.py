@@ -37,8 +37,8 @@ from ._validate import is_concrete
 from .accuracy import Accuracy
 from .impact import ImpactResult, impact_analysis
 from .ltca import LTCAResult, loaded_contact_analysis
-from .program_cache import cached_call
-from .resources import check_memory
+from .runtime.program_cache import cached_call
+from .runtime.resources import check_memory
 from .scene import Scene
 from .tca import TCAResult, tooth_contact_analysis
 
@@ -164,7 +164,7 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     Solver outcomes are named results (`RESULTS`) in each stage's `result` field, computed
     in the compiled program (no host callback, so the program stays cacheable).
 
-    With the program cache on (`gearjax.program_cache`; the command line's default, opt-in in
+    With the program cache on (`gearjax.runtime.program_cache`; the command line's default, opt-in in
     Python) a top-level call loads the traced program of a scene of the same structure
     from disk instead of tracing it again.
 
@@ -184,7 +184,7 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     Raises:
         MemoryEstimateError: (a `ValueError`) before anything is compiled, when the
             program's estimated memory exceeds what the device has
-            (`gearjax.resources`); it names the knobs and the face-slice count that fits.
+            (`gearjax.runtime.resources`); it names the knobs and the face-slice count that fits.
     """
     check_memory(scene)
     scene = prepare(scene)

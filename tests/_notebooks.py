@@ -5,7 +5,7 @@ and compiles, or loads from the run's compilation cache, every program it calls.
 notebook whose programs are those of one test file runs instead inside that file's
 process (`HOSTS`), where they are already traced and compiled: notebook 06 computes the
 gradients of `test_optimize.py`'s objective, a program that is never in the cache
-(`gearjax.cache`), so a kernel compiled it a second time (about 4 minutes on 2 cores);
+(`gearjax.runtime.cache`), so a kernel compiled it a second time (about 4 minutes on 2 cores);
 notebook 05 runs `test_impact.py`'s scenes. The cells run in order in one namespace, as
 a kernel runs them; a cell with IPython syntax (magics, shell escapes) is refused, since
 plain Python would not run it as IPython does.

@@ -18,11 +18,11 @@ import tempfile
 if "GEARJAX_TEST_CACHE_DIR" not in os.environ:  # the first process of the run owns it
     os.environ["GEARJAX_TEST_CACHE_DIR"] = tempfile.mkdtemp(prefix="gearjax-test-cache-")
     atexit.register(shutil.rmtree, os.environ["GEARJAX_TEST_CACHE_DIR"], ignore_errors=True)
-# read by gearjax's commands (`gearjax.cache`) and, in every process, by JAX itself
+# read by gearjax's commands (`gearjax.runtime.cache`) and, in every process, by JAX itself
 os.environ["GEARJAX_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
 os.environ["JAX_COMPILATION_CACHE_DIR"] = os.environ["GEARJAX_TEST_CACHE_DIR"]
 os.environ["JAX_COMPILATION_CACHE_MAX_SIZE"] = str(64 * 2**30)  # a limit, so that JAX locks
-os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0.2"  # gearjax.cache.MIN_COMPILE_TIME_S
+os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0.2"  # gearjax.runtime.cache.MIN_COMPILE_TIME_S
 # The suite compiles far more than it runs: without LLVM's optimisation passes XLA's CPU
 # backend compiles the default scene's program in about 60 % of the time and runs it about
 # 2.5x slower (`benchmarks/trace_compile.py` under these flags; docs/test_suite.md). No

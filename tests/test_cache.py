@@ -16,8 +16,8 @@ import jax.numpy as jnp
 import pytest
 
 import gearjax as gj
-from gearjax import _program_key, program_cache
-from gearjax._runtime import gradient_cache_safe
+from gearjax.runtime import program_cache, program_key as _program_key
+from gearjax.runtime.versions import gradient_cache_safe
 from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
 
 SCENE = """\
@@ -44,7 +44,7 @@ PROBE = textwrap.dedent(
         counts[event] = counts.get(event, 0) + 1
     jax.monitoring.register_event_listener(listen)
     from gearjax.cli import main
-    from gearjax.program_cache import program_cache_info
+    from gearjax.runtime.program_cache import program_cache_info
     code = main(["run", sys.argv[1], "--json"] + sys.argv[2:])
     counts.update({"program_cache/" + k: v for k, v in program_cache_info().items()})
     print("EVENTS " + json.dumps(counts), file=sys.stderr)
@@ -166,7 +166,7 @@ KEY_PROBE = textwrap.dedent(
     import jax
     jax.config.update("jax_enable_x64", True)
     import gearjax as gj
-    from gearjax import program_cache
+    from gearjax.runtime import program_cache
     from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
     pair = gj.InvoluteGearPair((23, 41), 4.0, 20.0, 12.0, 20.0)
     scene = _prepare(gj.Scene(pair, operating=gj.OperatingPoint(torque=100e3), effects=("impact",), accuracy="fast"))

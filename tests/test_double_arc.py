@@ -216,7 +216,7 @@ def test_four_state_speed_input(kwargs, match):
 
 def test_double_arc_scene_file_and_no_loaded_stages():
     from gearjax.scene import OperatingPoint, Scene
-    from gearjax.scene_file import SceneFileError, scene_from_dict
+    from gearjax.io.scene_file import SceneFileError, scene_from_dict
 
     data = {"pair": {"family": "double_circular_arc", "teeth": [24, 24], "normal_module": 4.0,
                      "helix_angle_deg": 15.0, "face_width": 55.0, "axial_pitch_error_um": -50.0}}

@@ -6,7 +6,7 @@ import jax
 import pytest
 
 from gearjax import OperatingPoint
-from gearjax.scene_file import parse_scene
+from gearjax.io.scene_file import parse_scene
 
 
 def test_usual_units_give_the_engine_values():

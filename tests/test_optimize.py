@@ -366,7 +366,7 @@ def test_scene_without_torque_and_small_population_are_rejected(seed_pair):
 
 
 def _scene_file(tmp_path, optimize: str) -> str:
-    from gearjax.scene_file import DEFAULT_SCENE_TOML
+    from gearjax.io.scene_file import DEFAULT_SCENE_TOML
 
     text = DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"') + "\n[optimize]\n" + optimize
     path = tmp_path / "scene.toml"
@@ -399,7 +399,7 @@ def test_cli_rejects_a_bad_optimize_section(tmp_path, capsys, optimize, field):
 
 def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, capsys, space, batch_values):
     from gearjax.cli import main
-    from gearjax.scene_file import load_scene
+    from gearjax.io.scene_file import load_scene
 
     path = _scene_file(tmp_path, f"population = {POPULATION}\ngenerations = 2\ntip_relief_length = [0.5, 4.5]\n"
                                  'certify = "fast"\n')

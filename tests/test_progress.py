@@ -1,4 +1,4 @@
-"""What long runs and compilations tell the user (`gearjax.progress`)."""
+"""What long runs and compilations tell the user (`gearjax.io.progress`)."""
 
 import json
 import os
@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 import pytest
 
-from gearjax.progress import Progress, compiling
+from gearjax.io.progress import Progress, compiling
 
 
 def test_a_slow_block_says_what_it_compiles_and_how_long_it_took(capsys):
@@ -43,7 +43,7 @@ def test_the_bar_appears_with_the_first_finished_step(capsys):
 CHILD = textwrap.dedent("""
     import json, sys
     import jax, jax.numpy as jnp
-    from gearjax.progress import compiling
+    from gearjax.io.progress import compiling
     jax.config.update("jax_compilation_cache_dir", sys.argv[1])
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     f = jax.jit(lambda x: jnp.cumsum(jnp.cos(x) ** 3) * 7.654321)

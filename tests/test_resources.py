@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import gearjax.pipeline
-import gearjax.sweep
+import gearjax.sweep.loads
 from gearjax import Accuracy, OperatingPoint, Scene, simulate
 from gearjax.cli import main
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.resources import MemoryEstimateError, check_memory, estimate_bytes
+from gearjax.runtime.resources import MemoryEstimateError, check_memory, estimate_bytes
 from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
-from gearjax.scene_file import DEFAULT_SCENE_TOML
+from gearjax.io.scene_file import DEFAULT_SCENE_TOML
 from gearjax.sweep import load_sweep
 
 
@@ -22,7 +22,7 @@ from gearjax.sweep import load_sweep
 def no_compute(forbid):
     """Fail if anything is compiled before the memory check."""
     forbid(gearjax.pipeline, "simulate_program")
-    forbid(gearjax.sweep, "_load_sweep")
+    forbid(gearjax.sweep.loads, "_load_sweep")
 
 
 def test_a_scene_that_cannot_fit_is_refused_before_compiling(seed_pair, no_compute, monkeypatch):

@@ -1,4 +1,4 @@
-"""The process settings that gearjax makes on import (see `gearjax._runtime`)."""
+"""The process settings that gearjax makes on import (see `gearjax.runtime.versions`)."""
 
 import os
 import subprocess
@@ -10,7 +10,7 @@ import pytest
 from jaxlib import version as jaxlib_version
 
 import gearjax  # noqa: F401  (import sets them)
-from gearjax import _runtime
+from gearjax.runtime import versions as _runtime
 
 
 def test_flags_set_on_import_only_for_an_affected_jaxlib():

@@ -17,7 +17,7 @@ import tomllib
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gearjax.scene_file import DEFAULT_SCENE_TOML, SceneFileError, scene_from_dict
+from gearjax.io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, scene_from_dict
 
 CURVILINEAR = """
 [pair]

@@ -11,12 +11,13 @@ import equinox as eqx
 import numpy as np
 import pytest
 
-import gearjax.sweep
+import gearjax.sweep.loads
+import gearjax.sweep.transition
 from gearjax import Accuracy, OperatingPoint, Scene, simulate
 from gearjax.cli import main
 from gearjax.impact import ImpactRegime
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.scene_file import DEFAULT_SCENE_TOML, parse_scene
+from gearjax.io.scene_file import DEFAULT_SCENE_TOML, parse_scene
 from gearjax.sweep import design_sweep, impact_sweep, load_sweep, regime_transition
 
 TINY = Accuracy(positions_per_pitch=4, face_slices=3)
@@ -134,7 +135,7 @@ def test_force_map_draws_cells_at_the_computed_points_only():
     import matplotlib  # the dev extra installs it
 
     matplotlib.use("Agg")
-    from gearjax import plot
+    from gearjax.io import plot
 
     ax = plot.impact_force_map([200.0, 600.0], [2000.0, 4000.0], [[1.0, 2.0], [3.0, 4.0]],
                                [["surface", "edge"], ["surface", "surface"]])
@@ -188,7 +189,7 @@ def test_cli_sweep_killed_between_chunks_resumes_to_the_uninterrupted_result(imp
         import jax
         jax.config.update("jax_enable_x64", True)
         jax.config.update("jax_numpy_dtype_promotion", "strict")
-        from gearjax import rundir
+        from gearjax.io import rundir
         from gearjax.cli import main
 
         saved = rundir.RunDirectory.save
@@ -259,7 +260,8 @@ def test_cli_sweep_rejects_bad_lists_with_status_2(option, value, match, capsys)
 @pytest.fixture
 def no_compute(forbid):
     """Fail if a sweep gets as far as computing: the checks must come first."""
-    forbid(gearjax.sweep, "_load_sweep", "_impact_sweep", "_transition")
+    forbid(gearjax.sweep.loads, "_load_sweep", "_impact_sweep")
+    forbid(gearjax.sweep.transition, "_transition")
 
 
 @pytest.mark.parametrize(

@@ -260,7 +260,7 @@ def test_safeguarded_newton_converges_where_newton_diverges():
     backtracks on |f|², which has no other minimum, and reaches the root 0."""
     import optimistix as optx
 
-    from gearjax._newton import SafeguardedNewton
+    from gearjax.tca._newton import SafeguardedNewton
 
     def f(y, args):
         return jnp.arctan(y)

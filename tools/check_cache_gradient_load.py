@@ -1,4 +1,4 @@
-"""The optimiser's gradient program and JAX's persistent compilation cache (`gearjax.cache`).
+"""The optimiser's gradient program and JAX's persistent compilation cache (`gearjax.runtime.cache`).
 
 Two fresh processes compute the optimiser's batched value and gradient of the seed 001
 objective (`fast`, 2 designs) with one new cache directory.

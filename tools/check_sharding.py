@@ -25,7 +25,7 @@ SCRIPT = """
 import json, jax
 jax.config.update("jax_enable_x64", True)
 import equinox as eqx, numpy as np
-from gearjax.scene_file import DEFAULT_SCENE_TOML, parse_scene
+from gearjax.io.scene_file import DEFAULT_SCENE_TOML, parse_scene
 from gearjax.sweep import design_sweep, impact_sweep
 from gearjax._solution import enum_name
 scene, _ = parse_scene(DEFAULT_SCENE_TOML.replace('accuracy = "default"', 'accuracy = "fast"'))

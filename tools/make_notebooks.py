@@ -17,7 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import gearjax as gj
-from gearjax import plot"""
+from gearjax.io import plot"""
 
 
 def notebook(cells):

@@ -1,4 +1,4 @@
-"""The memory model of `gearjax.resources`: its constants from XLA's memory plan, and its
+"""The memory model of `gearjax.runtime.resources`: its constants from XLA's memory plan, and its
 estimate against the measured peak memory of larger scenes.
 
     python tools/memory_model.py
@@ -9,7 +9,7 @@ it prints XLA's temporary buffer size of the compiled `simulate` program
 (`Compiled.memory_analysis()`) and the constants c (per slice pair) and c1 (per slice)
 that these give; for 401 and 801 slices it runs the program and compares the growth of
 the process's peak resident memory over the 21-slice process (the runtime and the
-compiler take the same there) with `gearjax.resources.estimate_bytes`.
+compiler take the same there) with `gearjax.runtime.resources.estimate_bytes`.
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ import json, resource, sys, dataclasses
 import jax
 jax.config.update("jax_enable_x64", True)
 import gearjax as gj
-from gearjax.resources import estimate_bytes
+from gearjax.runtime.resources import estimate_bytes
 from gearjax.pipeline import prepare as _prepare, simulate_program as _simulate
-from gearjax.scene_file import default_scene
+from gearjax.io.scene_file import default_scene
 scene, _ = default_scene()
 scene = dataclasses.replace(scene, effects=frozenset({"ltca"}),
                             accuracy=scene.accuracy.replace(face_slices=int(sys.argv[1])))

@@ -24,8 +24,8 @@ import numpy as np  # noqa: E402
 import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
 
 import gearjax as gj  # noqa: E402
-from gearjax.sweep_command import parse_list  # noqa: E402
-from gearjax.scene_file import default_scene  # noqa: E402
+from gearjax.cli.sweep import parse_list  # noqa: E402
+from gearjax.io.scene_file import default_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

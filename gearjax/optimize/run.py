@@ -35,9 +35,9 @@ import numpy as np
 from .._custom_types import ArrayLike
 from .._validate import check_int
 from ..accuracy import Accuracy
-from ..cache import exclude_from_persistent_cache
-from ..progress import Progress, compiling
-from ..rundir import RunDirectory, atomic_write
+from ..runtime.cache import exclude_from_persistent_cache
+from ..io.progress import Progress, compiling
+from ..io.rundir import RunDirectory, atomic_write
 from .certification import CERTIFY_TOP, Certification, accuracy_name, candidates, certification_accuracy, certify
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
@@ -112,7 +112,7 @@ def _batch_gradients(objective: Objective, designs):
     Gradient descent and `sensitivities` share it: reverse mode costs about the same for
     the four arguments as for the design alone, and one program compiles once (minutes).
     With jaxlib < 0.12 it is kept out of JAX's persistent cache
-    (`gearjax.cache.exclude_from_persistent_cache`).
+    (`gearjax.runtime.cache.exclude_from_persistent_cache`).
     """
     dtype = objective.torques.dtype
     speed = jnp.asarray(objective.scene.operating.speed, dtype)

@@ -32,7 +32,7 @@ rad between neighbouring angles).
 Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
 `args`; the analysis solves the candidates whose Newton solve failed again with a damped
-Newton (`gearjax._newton.SafeguardedNewton`); failures are reported (`converged`), never
+Newton (`gearjax.tca._newton.SafeguardedNewton`); failures are reported (`converged`), never
 thrown.
 """
 

@@ -35,7 +35,7 @@ import numpy as np
 import optimistix as optx
 
 from .._custom_types import Array, Float
-from .._newton import SafeguardedNewton
+from ._newton import SafeguardedNewton
 from .._numerics import as_float, rotate2
 from ..accuracy import Accuracy
 from ..geometry._base import AbstractGearPair

@@ -46,7 +46,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .._custom_types import Array, Scalar
-from .._newton import SafeguardedNewton
+from ._newton import SafeguardedNewton
 from .._numerics import as_float
 from ._slice import SliceContact, make_problem, select_contact, solve_candidates
 from .analysis import _lead_correction, _plane_of_action_slice, _retry_failed, contact_point, fallback_steps

@@ -36,6 +36,6 @@ for (a, b, c) in list(zip(*np.nonzero(un)))[:4]:
     print("   starts", np.asarray(_starts(prob)).round(5).tolist())
     print("   relevant", np.asarray(relevance(prob)), "conv", np.asarray(conv), "onflank", np.asarray(_on_active_flanks(p, vals)), "failed", np.asarray(failed), "edge first", np.asarray(edge_is_first(prob, vals)))
     print("   values", np.asarray(vals).round(6).tolist())
-    from gearjax._newton import SafeguardedNewton
+    from gearjax.tca._newton import SafeguardedNewton
     v2 = solve_again(prob, 0, SafeguardedNewton(rtol=rtol, atol=atol), acc.newton_max_steps, True, vals, conv)
     print("   retry", np.asarray(v2[0]).round(6).tolist(), bool(v2[1]), bool(v2[2]))

@@ -10,7 +10,7 @@ import numpy as np
 jax.config.update("jax_enable_x64", True)
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
-from gearjax.report import result_dict  # noqa: E402
+from gearjax.io.report import result_dict  # noqa: E402
 
 for positions in (32, 64, 128, 256):
     for slices in (21, 41, 81, 161):

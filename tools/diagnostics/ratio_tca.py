@@ -10,7 +10,7 @@ from _cases import random_involute, scene, missed_contacts, forward
 from gearjax.tca._slice import make_problem, solve_candidates, solve_again, relevance, edge_is_first
 from gearjax.tca.grid import face_slices, positions
 from gearjax.tca.analysis import fallback_steps
-from gearjax._newton import SafeguardedNewton
+from gearjax.tca._newton import SafeguardedNewton
 import test_hard_cases_ratios as R
 
 teeth, seed = R.GROUPS["ratio_1_10"]

@@ -19,7 +19,7 @@ jax.config.update("jax_enable_x64", True)
 import test_hard_cases_ratios as R  # noqa: E402
 from _cases import random_involute, scene  # noqa: E402
 
-from gearjax._newton import SafeguardedNewton  # noqa: E402
+from gearjax.tca._newton import SafeguardedNewton  # noqa: E402
 from gearjax.tca._slice import _contact_residual, make_problem  # noqa: E402
 from gearjax.tca.analysis import fallback_steps  # noqa: E402
 from gearjax.tca.grid import face_slices, positions  # noqa: E402

@@ -7,7 +7,7 @@ import optimistix as optx
 import gearjax as gj
 from _cases import random_involute, scene, missed_contacts
 from gearjax.tca._slice import make_problem, solve_candidates, solve_again, relevance, edge_is_first, _missed_flank
-from gearjax._newton import SafeguardedNewton
+from gearjax.tca._newton import SafeguardedNewton
 from gearjax.tca.grid import face_slices
 import test_hard_cases as T
 N = int(sys.argv[1])

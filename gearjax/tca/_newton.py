@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import lineax as lx
 import optimistix as optx
 
-from ._custom_types import Array, Scalar
+from .._custom_types import Array, Scalar
 
 
 class _State(eqx.Module):

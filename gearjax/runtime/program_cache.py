@@ -2,7 +2,7 @@
 
 Tracing `simulate` (Python builds the jaxpr: about 12 s for the default scene) and
 lowering it (about 2 s) happen in every process, even when JAX's persistent compilation
-cache (`gearjax.cache`) holds the compiled program. This cache stores the lowered program
+cache (`gearjax.runtime.cache`) holds the compiled program. This cache stores the lowered program
 (`jax.export.Exported.serialize()`: the StableHLO bytecode and its calling convention)
 with the structure of its result, so a later process neither traces nor lowers
 `simulate`: it loads the program, calls it (its compilation is then found in JAX's cache)
@@ -25,13 +25,13 @@ top-level call on concrete arrays (under `jit`, `vmap` or `grad` the scene's lea
 tracers), or with `jax_disable_jit`, `jax_debug_nans`/`jax_debug_infs`; a program that
 cannot be exported or serialized. Such a call traces as without the cache.
 `program_cache_info()` counts hits, loads, misses, writes and bypasses in this process,
-and logger `gearjax.program_cache` says (at INFO) what was loaded or stored.
+and logger `gearjax.runtime.program_cache` says (at INFO) what was loaded or stored.
 
 What the key cannot see: code outside gearjax that tracing runs but that is not the module
 of a class in the scene (a helper module that a user's family imports), and functions
 monkeypatched at run time. Disable the program cache while editing such code.
 
-Where it is stored: `enable_compilation_cache()` (see `gearjax.cache`) enables it in the
+Where it is stored: `enable_compilation_cache()` (see `gearjax.runtime.cache`) enables it in the
 subdirectory `programs/` of the cache directory; `enable_program_cache()` /
 `disable_program_cache()` switch it alone, and `with program_cache(): ...` enables it for
 a block only (the command line's way). One file per scene structure,
@@ -58,7 +58,7 @@ from typing import Any
 
 import jax
 
-from ._program_key import Uncacheable, program_key
+from .program_key import Uncacheable, program_key
 from .cache import default_cache_dir, make_cache_dir
 
 #: Subdirectory of the cache directory that holds the program cache's entries.

@@ -17,8 +17,8 @@ reproductions of `gearjax.papers` (the command is presentation: it may import th
 package, the core may not).
 
 Programs are cached on disk (`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`): JAX's
-persistent compilation cache (`gearjax.cache`) holds the compiled programs and gearjax's
-program cache (`gearjax.program_cache`, in `programs/`) the traced ones, so a second run
+persistent compilation cache (`gearjax.runtime.cache`) holds the compiled programs and gearjax's
+program cache (`gearjax.runtime.program_cache`, in `programs/`) the traced ones, so a second run
 of the same scene structure neither traces nor compiles; `--no-cache` disables both. The
 program cache is enabled for the command's own call only, so calling `main` in a process
 (tests, notebooks) leaves the process's setting as it was.
@@ -64,7 +64,7 @@ def _attach_values(argv: list[str]) -> list[str]:
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
-    from . import __version__
+    from .. import __version__
 
     try:
         jax_version = version("jax")
@@ -84,7 +84,7 @@ def _enable_x64() -> None:
 #: The command stores even its quickest compilations: building and reporting a scene runs
 #: about a hundred small eager operations, each compiled in tens of ms, which together cost
 #: more than the traced program's load (the library's default skips them, see
-#: `gearjax.cache.MIN_COMPILE_TIME_S`).
+#: `gearjax.runtime.cache.MIN_COMPILE_TIME_S`).
 COMMAND_MIN_COMPILE_TIME_S = 0.0
 
 
@@ -98,11 +98,11 @@ def _caches(args: argparse.Namespace):
     apply inside the command only: on return the process's settings are as they were."""
     import jax
 
-    from .cache import _cache_started, enable_compilation_cache
-    from .program_cache import program_cache
+    from ..runtime.cache import _cache_started, enable_compilation_cache
+    from ..runtime.program_cache import program_cache
 
     # programs are cached; with jaxlib < 0.12 `optimize`'s gradient program keeps itself
-    # out (`gearjax.cache`: it could not be loaded back)
+    # out (`gearjax.runtime.cache`: it could not be loaded back)
     if args.no_cache:
         # nor a cache that JAX was pointed at by its own settings ($JAX_COMPILATION_CACHE_DIR);
         # JAX decides at the process's first compilation, so a started cache stays
@@ -128,10 +128,10 @@ def _caches(args: argparse.Namespace):
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .report import result_dict, summary
-    from .pipeline import simulate
-    from .papers.seed001 import SEED_001_NOTE
-    from .scene_file import SceneFileError, default_scene, load_scene
+    from ..io.report import result_dict, summary
+    from ..pipeline import simulate
+    from ..papers.seed001 import SEED_001_NOTE
+    from ..io.scene_file import SceneFileError, default_scene, load_scene
 
     try:
         if args.scene is None:
@@ -147,10 +147,10 @@ def _run(args: argparse.Namespace) -> int:
         notes.append(
             "[operating] speed_rpm is used by the mesh-in impact only, which this scene does not compute; "
             "add effects = [\"impact\"] to [analysis] (with a torque) to compute it")
-    from .resources import MemoryEstimateError
+    from ..runtime.resources import MemoryEstimateError
 
     # The summary reports every stage's result code, so a failed stage is shown, not raised.
-    from .progress import compiling
+    from ..io.progress import compiling
 
     try:
         with compiling(f"the {_program_kind(scene)} program for this scene structure"):
@@ -174,7 +174,7 @@ def _program_kind(scene) -> str:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from .papers import curvilinear, double_arc
+    from ..papers import curvilinear, double_arc
 
     if args.paper == "dca":
         out = double_arc.reproduce(cross_check=args.cross_check)
@@ -186,13 +186,13 @@ def _reproduce(args: argparse.Namespace) -> int:
 
 
 def _optimize(args: argparse.Namespace) -> int:
-    from .optimize.command import run_command
+    from .optimize import run_command
 
     return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .sweep_command import run_command
+    from .sweep import run_command
 
     return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot,
                        chunk=args.chunk, resume=args.resume, quiet=args.quiet)
@@ -246,7 +246,3 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "sweep":
             return _sweep(args)
         return _reproduce(args)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

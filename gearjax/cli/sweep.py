@@ -1,5 +1,5 @@
 """`gearjax sweep`: the mesh-in impact over a torque × speed grid (`gearjax.sweep.impact_sweep`,
-in chunks of torques by `gearjax.sweep_run.run_impact_sweep`), written as `sweep.json` and
+in chunks of torques by `gearjax.sweep.run.run_impact_sweep`), written as `sweep.json` and
 `sweep.npz`, optionally plotted; a killed run continues with `--resume`.
 
     gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--chunk N] [--out DIR]
@@ -64,7 +64,7 @@ def _number(option: str, text: str) -> float:
 
 def run_command(scene_path: str | None, torque: str, speed: str, out: str | None, as_json: bool, plot: bool,
                 chunk: int | None = None, resume: bool = False, quiet: bool = False) -> int:
-    from .scene_file import SceneFileError, default_scene, load_scene
+    from ..io.scene_file import SceneFileError, default_scene, load_scene
 
     try:
         torques_Nm = parse_list("--torque-Nm", torque)
@@ -79,9 +79,9 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
     except (ListError, SceneFileError) as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
-    from .resources import MemoryEstimateError
-    from .rundir import RunDirectoryError
-    from .sweep_run import run_impact_sweep
+    from ..runtime.resources import MemoryEstimateError
+    from ..io.rundir import RunDirectoryError
+    from ..sweep.run import run_impact_sweep
 
     progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
     try:
@@ -102,7 +102,7 @@ def write_plots(report: dict, directory: Path, scene_name: str = "scene") -> lis
     import matplotlib
 
     matplotlib.use("Agg")
-    from . import plot
+    from ..io import plot
 
     paths = []
     ax = plot.impact_force_map(report["torque_Nm"], report["speed_rpm"], report["impact_force_N"],

@@ -9,14 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .certification import accuracy_name
-from .run import genetic, gradient_descent
-from .settings import OptimizeSettings, SettingsError
-from .space import design_dict
+from ..optimize.certification import accuracy_name
+from ..optimize.run import genetic, gradient_descent
+from ..optimize.settings import OptimizeSettings, SettingsError
+from ..optimize.space import design_dict
 
 
 def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool) -> int:
-    from ..scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene, read_scene_text
+    from ..io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene, read_scene_text
 
     try:
         text = DEFAULT_SCENE_TOML if scene_path is None else read_scene_text(scene_path)

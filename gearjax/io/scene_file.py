@@ -11,15 +11,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .accuracy import Accuracy
-from .geometry.errors import MeshErrors
-from .geometry.curvilinear import CurvilinearGearPair
-from .geometry.double_arc import DoubleArcGearPair
-from .geometry.involute import InvoluteGearPair
-from .geometry.modification import FlankModification
-from .ltca import IsoCompliance, SliceCompliance
-from .scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
-from .units import Material
+from ..accuracy import Accuracy
+from ..geometry.errors import MeshErrors
+from ..geometry.curvilinear import CurvilinearGearPair
+from ..geometry.double_arc import DoubleArcGearPair
+from ..geometry.involute import InvoluteGearPair
+from ..geometry.modification import FlankModification
+from ..ltca import IsoCompliance, SliceCompliance
+from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
+from ..units import Material
 
 if sys.version_info >= (3, 11):
     import tomllib

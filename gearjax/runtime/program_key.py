@@ -1,4 +1,4 @@
-"""The program cache's key (`gearjax.program_cache`): a SHA-256 of what a traced program
+"""The program cache's key (`gearjax.runtime.program_cache`): a SHA-256 of what a traced program
 depends on, computed without tracing.
 
 The key covers the call's function (by qualified name: it is gearjax's, whose sources are

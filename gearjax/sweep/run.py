@@ -29,10 +29,10 @@ import equinox as eqx
 import jax
 import numpy as np
 
-from ._validate import check_int
-from .progress import Progress, compiling
-from .rundir import RunDirectory, atomic_write
-from .scene import Scene
+from .._validate import check_int
+from ..io.progress import Progress, compiling
+from ..io.rundir import RunDirectory, atomic_write
+from ..scene import Scene
 
 #: Keys of `sweep_rows` whose values have one entry per torque (the rest are per run).
 _PER_RUN = ("speed_rpm", "accuracy", "wall_time_s", "chunks", "chunk_length", "files")
@@ -67,7 +67,8 @@ def run_impact_sweep(
         for the impact), plus `speed_rpm`, `accuracy`, `wall_time_s` (the run's, resumed
         parts included), `chunks`, `chunk_length`, `files`.
     """
-    from .sweep import _speeds, _torques, impact_sweep
+    from ._axes import _speeds, _torques
+    from .loads import impact_sweep
 
     _torques(None, torques_Nm), _speeds(None, speeds_rpm)  # impact_sweep's checks, before any work
     torques_Nm, speeds_rpm = np.asarray(torques_Nm, dtype=float), np.asarray(speeds_rpm, dtype=float)
@@ -133,7 +134,7 @@ def run_impact_sweep(
 def sweep_rows(sweep) -> dict:
     """An `ImpactSweep` in the usual units (keys in the README): lists per torque, nested
     [torque][speed] for the impact, and `speed_rpm`."""
-    from ._solution import RESULTS, enum_name
+    from .._solution import RESULTS, enum_name
 
     imp, ltca = sweep.impact, sweep.ltca
     rb2 = float(np.asarray(ltca.action_radius).reshape(-1, 2)[0, 1])
@@ -174,14 +175,14 @@ def write_results(report: dict, directory: Path) -> list[str]:
 def scene_digest(scene: Scene) -> str:
     """SHA-256 of everything a scene holds (static settings and array values), equal across
     processes for equal scenes: a resumed sweep checks it."""
-    from ._program_key import canon
+    from ..runtime.program_key import canon
 
     host = jax.tree_util.tree_map(lambda x: np.asarray(x) if eqx.is_array(x) else x, scene)
     return hashlib.sha256(repr(canon(host)).encode()).hexdigest()
 
 
 def _accuracy_name(scene: Scene) -> str:
-    from .optimize.certification import accuracy_name
+    from ..optimize.certification import accuracy_name
 
     return accuracy_name(scene.accuracy)
 

@@ -8,7 +8,7 @@ and compiling it with XLA (about a minute on a 2-core CPU). Two caches on disk r
   compiled XLA executables, keyed by the lowered program, the JAX version and the backend.
   It never stores a program that contains a host callback, which is why gearjax's programs
   report solver failures as result codes (`gearjax.RESULTS`) instead of runtime checks.
-* **gearjax's program cache** (`gearjax.program_cache`) stores the traced and lowered
+* **gearjax's program cache** (`gearjax.runtime.program_cache`) stores the traced and lowered
   program of `simulate` (`jax.export`), so a later process neither traces nor lowers it;
   its compilation is then found in JAX's cache.
 
@@ -31,7 +31,7 @@ there, so the directory must be writable only by its user.
 such an executable (e.g. the optimiser's value and gradient of the seed 001 objective) is
 written to the cache, but loading it in a later process crashes that process (a stack
 overflow in LLVM's JIT linker). Where the installed jaxlib is not known to load them safely
-(`gearjax._runtime.gradient_cache_safe`: jaxlib < 0.12), gearjax's own gradient program
+(`gearjax.runtime.versions.gradient_cache_safe`: jaxlib < 0.12), gearjax's own gradient program
 (`gearjax.optimize`: gradient descent and `sensitivities` share it) keeps itself out of the
 cache with `exclude_from_persistent_cache`; with a current jaxlib it is cached like every
 other program, and a later process loads it instead of compiling it.
@@ -81,7 +81,7 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, programs:
     Args:
         path: the cache directory.
         programs: also enable the program cache (traced programs of `simulate`, in
-            `path/programs`, see `gearjax.program_cache`), so that a later process skips
+            `path/programs`, see `gearjax.runtime.program_cache`), so that a later process skips
             tracing as well.
 
     Returns:
@@ -112,14 +112,14 @@ def _do_nothing() -> None:
 def exclude_from_persistent_cache() -> None:
     """Inside a function being traced for `jit`: keep its compiled program out of JAX's
     persistent compilation cache where the installed jaxlib may crash on loading it back
-    (`gearjax._runtime.gradient_cache_safe`; call it in a gradient program of your own
+    (`gearjax.runtime.versions.gradient_cache_safe`; call it in a gradient program of your own
     through the impact force). With a jaxlib that loads such programs it does nothing.
 
     It adds a host callback that does nothing (`jax.debug.callback`, an effect, so it is
     never removed): jax < 0.12 does not write an executable that has host callbacks. The
     callback costs one call into Python per execution of the program (microseconds).
     """
-    from ._runtime import gradient_cache_safe
+    from .versions import gradient_cache_safe
 
     if not gradient_cache_safe():
         jax.debug.callback(_do_nothing)

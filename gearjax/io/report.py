@@ -10,11 +10,11 @@ import math
 
 import numpy as np
 
-from ._solution import RESULTS, enum_message, enum_name
-from .pipeline import SimulationResult
-from .scene import Scene
-from .tca import ContactKind
-from .units import UM_PER_MM, URAD_PER_RAD
+from .._solution import RESULTS, enum_message, enum_name
+from ..pipeline import SimulationResult
+from ..scene import Scene
+from ..tca import ContactKind
+from ..units import UM_PER_MM, URAD_PER_RAD
 
 
 def _f(x) -> float:

@@ -1,5 +1,5 @@
 """The run directory of a long run (an optimisation, `gearjax.optimize.run`; a chunked
-sweep, `gearjax.sweep_run`): a description checked on resume, the history appended and
+sweep, `gearjax.sweep.run`): a description checked on resume, the history appended and
 synced per step, and the state replaced atomically."""
 
 from __future__ import annotations

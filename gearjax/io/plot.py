@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .tca import ContactKind
+from ..tca import ContactKind
 
 
 def _axes(ax):
@@ -20,7 +20,7 @@ def _axes(ax):
     try:
         import matplotlib.pyplot as plt
     except ImportError as err:  # pragma: no cover - depends on the environment
-        raise ImportError("gearjax.plot needs matplotlib: pip install 'gearjax[plot]'") from err
+        raise ImportError("gearjax.io.plot needs matplotlib: pip install 'gearjax[plot]'") from err
     _, ax = plt.subplots(figsize=(6.4, 4.0))
     return ax
 

@@ -15,7 +15,7 @@ workarounds, applied on import and each only unless the user already chose a val
 - jaxlib < 0.12.0: an executable of a reverse-mode impact gradient loaded from JAX's
   persistent cache crashed the loading process (a stack overflow in LLVM's JIT linker, seen
   with 0.10.2; 0.11.x untested), so gearjax keeps its gradient programs out of that cache
-  (`gradient_cache_safe`, `gearjax.cache`).
+  (`gradient_cache_safe`, `gearjax.runtime.cache`).
 
 The settings are read once, when JAX's CPU backend starts: if it was already running when
 gearjax was imported, they cannot take effect and a warning says so. Why and how each was
@@ -140,7 +140,7 @@ def _warn_if_started(setting: str, purpose: str, stacklevel: int = 4) -> None:
     if _backends_started():
         warnings.warn(
             f"gearjax was imported after JAX had started its backends, so {setting} ({purpose}, "
-            "see gearjax._runtime) cannot take effect. Import gearjax before running any JAX "
+            "see gearjax.runtime.versions) cannot take effect. Import gearjax before running any JAX "
             "computation, or set it in the environment.",
             RuntimeWarning,
             stacklevel=stacklevel,

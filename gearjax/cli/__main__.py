@@ -1,0 +1,5 @@
+"""`python -m gearjax.cli`: the `gearjax` command."""
+
+from . import main
+
+raise SystemExit(main())
