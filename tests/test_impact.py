@@ -295,7 +295,7 @@ def test_first_contact_search_is_a_root_in_a_few_newton_steps(seed_pair):
     """The safeguarded Newton search stops at a root of the gap H (|H| within the
     tolerance) after a few evaluations, at the angle a tight bisection of the same H on the
     same grid bracket finds, for a flank (surface) and a tip-edge first contact."""
-    from gearjax.impact import analysis
+    from gearjax.impact import search
 
     for y, torque, regime in ((PAPER, 400.0, "surface"), (PLAIN, 1000.0, "edge")):
         s = scene(seed_pair, y, torque)
@@ -304,13 +304,13 @@ def test_first_contact_search_is_a_root_in_a_few_newton_steps(seed_pair):
         assert imp.regime_name == regime
         assert 2 <= int(imp.search_steps) <= 6
         pair = s.pair.resolve()
-        ctx = analysis._Context(pair, s.depth, jnp.asarray(s.operating.torque), s.contact_model, s.pairs)
-        found, column, lower, upper, _, _ = analysis._bracket(sim.tca, sim.ltca)
+        ctx = search.SearchContext(pair, s.depth, jnp.asarray(s.operating.torque), s.contact_model, s.pairs)
+        found, column, lower, upper, _, _ = search.bracket(sim.tca, sim.ltca)
         assert bool(found) and int(jnp.asarray(s.pairs)[column]) == int(imp.pair_index)
 
         @jax.jit
         def gap(phi1, column=column, ctx=ctx):
-            (te, lte, _, _), _ = analysis._evaluate(ctx, column, phi1)
+            (te, lte, _, _), _ = search.evaluate(ctx, column, phi1)
             return te - lte
 
         root = float(imp.pinion_angle)
@@ -328,14 +328,14 @@ def test_first_contact_tangents_follow_the_root(seed_pair):
     """The search's custom JVP (implicit function theorem, rates to second order) against
     central differences of searches re-run at nearby torques, on a flank and a tip-edge
     first contact: the root, the loaded TE there and both rates."""
-    from gearjax.impact import analysis
+    from gearjax.impact import search as fc
 
     pair = seed_pair.resolve()
     model = scene(seed_pair, PAPER, 400.0).contact_model
 
     def search(torque_Nmm, depth, bracket):
-        ctx = analysis._Context(pair, depth, torque_Nmm, model, (-2, -1, 0, 1, 2))
-        r = analysis.first_contact(ctx, *bracket[1:], bracket[0])
+        ctx = fc.SearchContext(pair, depth, torque_Nmm, model, (-2, -1, 0, 1, 2))
+        r = fc.first_contact(ctx, *bracket[1:], bracket[0])
         return jnp.stack([r.pinion_angle, r.contact.lte, r.contact.te_slope, r.contact.lte_slope])
 
     # one program: the differences use the primal output of the JVP program
@@ -343,7 +343,7 @@ def test_first_contact_tangents_follow_the_root(seed_pair):
     for y, torque in ((PAPER, 400.0), (PLAIN, 1000.0)):
         s = scene(seed_pair, y, torque)
         sim = gj.simulate(s)
-        bracket = analysis._bracket(sim.tca, sim.ltca)
+        bracket = fc.bracket(sim.tca, sim.ltca)
         t = jnp.asarray(s.operating.torque)
         values, tangents = tangent(t, s.depth, bracket)
         # the custom JVP's primal is the search that `simulate` ran

@@ -5,7 +5,7 @@ import jax, jax.numpy as jnp, numpy as np
 jax.config.update("jax_enable_x64", True)
 import gearjax as gj
 from _cases import random_involute, scene, missed_contacts
-from gearjax.impact import analysis
+from gearjax.impact import search
 import test_hard_cases as T
 
 rng = np.random.default_rng(20261125)
@@ -18,10 +18,10 @@ sim = gj.simulate(s, throw=False)
 imp = sim.impact
 print("impact", gj.enum_name(imp.result), "steps", int(imp.search_steps), "phi*", float(imp.pinion_angle), "kind", gj.enum_name(imp.kind))
 p = s.pair.resolve()
-ctx = analysis._Context(p, s.depth, jnp.asarray(s.operating.torque), s.contact_model, s.pairs)
-found, column, lower, upper, gl, gu = analysis._bracket(sim.tca, sim.ltca)
+ctx = search.SearchContext(p, s.depth, jnp.asarray(s.operating.torque), s.contact_model, s.pairs)
+found, column, lower, upper, gl, gu = search.bracket(sim.tca, sim.ltca)
 print("bracket", float(lower), float(upper), float(gl), float(gu), "column", int(column))
-ev = jax.jit(lambda phi: analysis._evaluate(ctx, column, phi))
+ev = jax.jit(lambda phi: search.evaluate(ctx, column, phi))
 lo, hi = float(lower), float(upper)
 def info(phi):
     (te, lte, tca), (j, ok) = ev(jnp.asarray(phi))

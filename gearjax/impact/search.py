@@ -1,0 +1,298 @@
+r"""The first contact of the incoming tooth pair under load: bracket, root search, gradients.
+
+**First contact.** Follow one tooth pair $k$ as the pinion turns. Its flank, tip-edge and
+face-end candidates would touch at the gear offsets $\Delta_k(z, \varphi_1)$ of the
+unloaded TCA along the face, while the pairs already in mesh hold the gear at their loaded
+transmission error $\mathrm{LTE}_{\neg k}(\varphi_1)$, computed by the LTCA with pair $k$
+unloaded. Pair $k$ is clear while
+
+$$H(\varphi_1) = \max_z \Delta_k(z, \varphi_1) - \mathrm{LTE}_{\neg k}(\varphi_1) < 0,$$
+
+i.e. while its rigid gap (geometry, modifications, errors) exceeds the loaded approach of
+the others, and first touches at the root $\varphi_1^*$ of $H$. The maximum over the face
+is continuous in $z$ (`tca.face_peak`: around the best slice, the face ends included), not
+the best slice's: a tip edge crossing a short relief touches over a stretch of the face
+narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the
+first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
+equals $\mathrm{LTE}_{\neg k}$ there). The first touching candidate gives the point M at
+$z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
+flank point. The same search serves every tooth family.
+
+**Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
+binding slice or candidate changes, or where the LTCA's active set does), so a
+safeguarded Newton iteration finds $\varphi_1^*$ in a handful of steps (Numerical
+Recipes' `rtsafe`). Each step runs TCA and LTCA at one pinion angle inside one
+forward-mode pass that also gives the rates $\Delta_k'$, $\mathrm{LTE}_{\neg k}'$ and so
+$H'$. The bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$, starts as
+the grid step and moves its end of the same sign to every evaluated point; the first point
+is the regula-falsi point of the grid values; the next is the Newton point
+$\varphi - H/H'$ when it lies inside the bracket and is at most half the previous step,
+else the bracket's midpoint (bisection), so the search never leaves the bracket and its
+steps at least halve. It has converged when $|H| \le$ atol and the Newton step or the
+bracket is below atol + rtol $|\varphi_1|$ (`Accuracy.newton_atol`, `newton_rtol`);
+`Accuracy.impact_max_steps` caps the evaluations, `ImpactResult.search_steps` counts
+them. The values at the last evaluated point, rates included, are the first contact's:
+the search is the only place the single-position TCA/LTCA is traced in a program that
+is not differentiated. The loop is a `lax.while_loop` with a result code, no callbacks.
+
+Gradients of $\varphi_1^*$ follow from the implicit function theorem,
+$\mathrm d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$, through a custom JVP
+(the iteration itself is not differentiated): differentiating evaluates the contact at
+the root once more, along the parameters' tangent and the root's together, so the rates
+(in the impact velocity) carry their own second-order change along $\varphi_1$. Where
+$H_\varphi = 0$ (zero load on perfect flanks: tangential engagement) the derivative is
+set to zero.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .._custom_types import Array, Bool, Int, Scalar
+from .._numerics import safe_divide
+from ..ltca.analysis import LTCAResult, loaded_contact_analysis
+from ..ltca.model import ContactModel
+from ..tca import TCAResult, tooth_contact_analysis
+from ..tca.face_peak import FacePeak, face_peak
+
+
+class SearchContext(eqx.Module):
+    """What a single-position evaluation needs (static settings kept static)."""
+
+    pair: eqx.Module
+    depth: eqx.Module
+    torque: Scalar
+    model: ContactModel
+    pairs: tuple[int, ...] = eqx.field(static=True)
+
+
+class _Contact(eqx.Module):
+    """The incoming pair $k$ at one pinion angle: its rigid offset $\\max_z\\Delta_k$ (`te`),
+    the loaded TE of the other pairs (`lte`), the TCA at that angle, the first touching
+    point along the face (`peak`), and the rates of both offsets along $\\varphi_1$."""
+
+    te: Scalar
+    lte: Scalar
+    tca: TCAResult
+    peak: FacePeak
+    te_slope: Scalar
+    lte_slope: Scalar
+
+    @property
+    def gap(self):
+        """$H = \\max_j\\Delta_{kj} - \\mathrm{LTE}_{\\neg k}$ (rad, gear 2)."""
+        return self.te - self.lte
+
+    @property
+    def gap_slope(self):
+        """$H' = \\mathrm dH/\\mathrm d\\varphi_1$ (-)."""
+        return self.te_slope - self.lte_slope
+
+
+def evaluate(ctx: SearchContext, column, phi1):
+    """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
+    incoming pair's first touching point along the face (`face_peak`, continuous in $z$
+    around the best slice $j$): `(te, lte, tca, peak), (j, solved)`."""
+    acc = ctx.model.accuracy
+    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None])
+    active = jnp.arange(len(ctx.pairs)) != column
+    ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
+    offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
+    j = jnp.argmax(offsets)
+    spacing = ctx.pair.face_width / acc.face_slices
+    peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
+                     spacing)
+    return (peak.te, ltca.transmission_error[0], tca, peak), (j, ltca.converged[0])
+
+
+def _with_rates(ctx: SearchContext, column, phi1):
+    """`evaluate` and, in the same forward-mode pass, the rates of both offsets along
+    $\\varphi_1$: `(contact, (j, solved))`."""
+    (te, lte, tca, peak), (dte, dlte, _, _), aux = jax.jvp(
+        lambda p: evaluate(ctx, column, p), (phi1,), (jnp.ones_like(phi1),), has_aux=True
+    )
+    return _Contact(te, lte, tca, peak, dte, dlte), aux
+
+
+class _Search(eqx.Module):
+    """Outcome of the first-contact search: the contact at its last point."""
+
+    pinion_angle: Scalar
+    contact: _Contact
+    slice_index: Int[Array, ""]
+    solved: Bool[Array, ""]
+    steps: Int[Array, ""]
+    converged: Bool[Array, ""]
+
+
+class _SearchState(eqx.Module):
+    """Carry of the search loop: the bracket, the next point and the last outcome."""
+
+    lower: Scalar
+    upper: Scalar
+    checked: Bool[Array, "2"]  # the sign of H at (lower, upper) was evaluated, not taken from the grid
+    point: Scalar  # where the next evaluation goes
+    probe: Int[Array, ""]  # the point is the lower end to check (-1), the upper one (+1), or neither (0)
+    last_step: Scalar  # length of the previous step (the safeguard's reference)
+    search: _Search
+
+
+def _tolerances(ctx: SearchContext, dtype):
+    """`(atol, rtol, tiny)`: the search's tolerances (`Accuracy.newton_atol/rtol` floored
+    near machine precision) and the smallest slope $H'$ trusted for a Newton step."""
+    rtol, atol = ctx.model.accuracy.newton_tolerances(dtype)
+    return atol, rtol, 1e3 * float(jnp.finfo(dtype).eps)
+
+
+def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, found) -> _Search:
+    """Safeguarded Newton iteration for $H(\\varphi_1) = 0$ on `[lower, upper]`
+    ($H$(lower) < 0 <= $H$(upper); `gap_lower`, `gap_upper` are those values on the cycle
+    grid), with $H$ and $H'$ from one forward-mode evaluation per step.
+
+    Starts at the regula-falsi point of the grid values. Each step evaluates $H$ and $H'$ at
+    the current point, moves the bracket end of the same sign there, and takes the Newton
+    step when it stays inside the bracket and is at most half the previous step, else
+    bisects.
+
+    The grid's signs at the bracket ends are those of the scene's LTCA, with the incoming
+    pair loaded; the search's $H$ leaves it out of the LTCA, and the window of tooth pairs
+    shifts by one between the grid's last position and the angle one step before its first.
+    So a bracket end is checked before the search relies on it: where the Newton step
+    leaves the bracket past an end whose sign was never evaluated, or the bracket shrinks
+    onto it, the next point is that end; if its sign is the wrong one the bracket moves
+    outwards by its initial width and the new end is checked (5 of 400 random
+    29/71 designs had $H > 0$ at the grid's lower end, so the search shrank onto it and
+    never converged). Converged once $|H| \\le$ atol and either the Newton step or the bracket is
+    below atol + rtol$|\\varphi_1|$ (the tolerances of `Accuracy.newton_atol/rtol`, floored
+    near machine precision); at most `Accuracy.impact_max_steps` evaluations. No gradient
+    flows through the iteration (`first_contact` supplies it).
+    """
+    ctx, column, lower, upper, gap_lower, gap_upper = jax.lax.stop_gradient(
+        (ctx, column, lower, upper, gap_lower, gap_upper)
+    )
+    atol, rtol, tiny = _tolerances(ctx, lower.dtype)
+    # One trace of the evaluation serves the loop body and the shape of its carry.
+    evaluate = eqx.filter_closure_convert(lambda p: _with_rates(ctx, column, p), lower)
+    width = upper - lower
+    start = lower - safe_divide(gap_lower * width, gap_upper - gap_lower, 0.5 * width)
+    margin = width / 64
+    start = jnp.where(jnp.isfinite(start), jnp.clip(start, lower + margin, upper - margin), lower + 0.5 * width)
+    contact, (j, solved) = jax.tree_util.tree_map(
+        lambda s: jnp.zeros(s.shape, s.dtype) if isinstance(s, jax.ShapeDtypeStruct) else s, evaluate.out_struct
+    )
+    zero = jnp.zeros((), jnp.int32)
+    initial = _SearchState(
+        lower, upper, jnp.zeros(2, bool), start, zero, width,
+        _Search(start, contact, j, solved, zero, jnp.zeros((), bool)),
+    )
+    max_steps = ctx.model.accuracy.impact_max_steps
+
+    def cond(state: _SearchState):
+        s = state.search
+        return (s.steps == 0) | (found & ~s.converged & (s.steps < max_steps))
+
+    def body(state: _SearchState):
+        x = state.point
+        contact, (j, solved) = evaluate(x)
+        h, dh = contact.gap, contact.gap_slope
+        below = h < 0
+        # A checked end of the wrong sign: the crossing lies beyond it, so the bracket
+        # moves outwards by its initial width.
+        out_down = (state.probe == -1) & ~below
+        out_up = (state.probe == 1) & below
+        lower = jnp.where(below, x, jnp.where(out_down, x - width, state.lower))
+        upper = jnp.where(below, jnp.where(out_up, x + width, state.upper), x)
+        checked = jnp.stack([jnp.where(below, True, state.checked[0] & ~out_down),
+                             jnp.where(below, state.checked[1] & ~out_up, True)])
+        tol = atol + rtol * jnp.abs(x)
+        increasing = dh > tiny
+        newton = -safe_divide(h, jnp.where(increasing, dh, 0.0))
+        converged = (jnp.abs(h) <= atol) & ((upper - lower <= tol) | (increasing & (jnp.abs(newton) <= tol)))
+        candidate = x + newton
+        take_newton = (
+            increasing & (candidate > lower) & (candidate < upper) & (jnp.abs(newton) <= 0.5 * state.last_step)
+        )
+        point = jnp.where(take_newton, candidate, lower + 0.5 * (upper - lower))
+        # Check an end before relying on it: where the step leaves the bracket past it, or
+        # the bracket has shrunk onto it.
+        shrunk = upper - lower <= tol
+        check_lower = ~checked[0] & (out_down | (increasing & (candidate <= lower)) | (shrunk & ~below))
+        check_upper = ~checked[1] & ~check_lower & (out_up | (increasing & (candidate >= upper)) | (shrunk & below))
+        point = jnp.where(check_lower, lower, jnp.where(check_upper, upper, point))
+        probe = jnp.where(check_lower, -1, jnp.where(check_upper, 1, 0)).astype(jnp.int32)
+        search = _Search(x, contact, j, solved, state.search.steps + 1, converged)
+        return _SearchState(lower, upper, checked, point, probe, jnp.abs(point - x), search)
+
+    return jax.lax.while_loop(cond, body, initial).search
+
+
+@eqx.filter_custom_jvp
+def first_contact(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, found) -> _Search:
+    """First contact of pair `column` in `[lower, upper]` (see `_search`), with the
+    gradients of the implicit function theorem: returns a `_Search` whose pinion angle
+    $\\varphi_1^*$ and contact carry $\\mathrm d/\\mathrm d\\theta$ through the root.
+
+    Differentiating evaluates the contact once more at $\\varphi_1^*$: with
+    $\\dot H_\\theta$ the change of $H$ along the parameters' tangent at fixed angle,
+    $\\dot\\varphi_1^* = -\\dot H_\\theta / H'$ (zero where $H' = 0$: tangential engagement of
+    unloaded perfect flanks), and every output $Q$ (the rates included, so second
+    derivatives along $\\varphi_1$ enter) changes by $\\dot Q_\\theta + Q'\\dot\\varphi_1^*$, one
+    forward-mode pass along $(\\dot\\theta, \\dot\\varphi_1^*)$. The bracket does not
+    change the root, so its tangents are ignored. First order only.
+    """
+    return _search(ctx, column, lower, upper, gap_lower, gap_upper, found)
+
+
+@first_contact.def_jvp
+def _first_contact_jvp(primals, tangents):
+    ctx, column = primals[:2]
+    search = _search(*primals)
+    root = search.pinion_angle
+    diff, static = eqx.partition(ctx, eqx.is_inexact_array)
+    d_ctx = jax.tree_util.tree_map(
+        lambda x, t: None if x is None else (jnp.zeros_like(x) if t is None else t),
+        diff,
+        tangents[0],
+        is_leaf=lambda v: v is None,
+    )
+
+    def gap(d):
+        (te, lte, _, _), _ = evaluate(eqx.combine(d, static), column, root)
+        return te - lte
+
+    _, gap_tangent = jax.jvp(gap, (diff,), (d_ctx,))
+    _, _, tiny = _tolerances(ctx, root.dtype)
+    slope = search.contact.gap_slope
+    d_root = -jnp.where(jnp.abs(slope) > tiny, safe_divide(gap_tangent, slope), 0.0)
+
+    def contact_at(d, p):
+        return _with_rates(eqx.combine(d, static), column, p)[0]
+
+    _, d_contact = jax.jvp(contact_at, (diff, root), (d_ctx, d_root))
+    d_contact = jax.tree_util.tree_map(
+        lambda t, x: t if eqx.is_inexact_array(x) else None, d_contact, search.contact
+    )
+    d_search = _Search(d_root, d_contact, None, None, None, None)
+    return search, d_search
+
+
+def bracket(tca: TCAResult, ltca: LTCAResult):
+    """First upward crossing of $H$ along the tracked tooth's history on the cycle grid:
+    `(found, column, lower, upper, gap_lower, gap_upper)`.
+
+    Pair $k$ at pinion angle $\\varphi_1$ is pair 0 at $\\varphi_1 - kp$, so ordering the
+    grid by descending pair and ascending angle follows one tooth through the mesh. The
+    gap at `upper` is the scene's, with pair $k$ loaded: it only seeds the first step.
+    """
+    offsets = jnp.max(jnp.where(tca.valid, tca.slice_te, -jnp.inf), axis=-1)  # (pos, pair)
+    h = offsets - ltca.transmission_error[:, None]
+    n_pos, n_pair = h.shape
+    line = h[:, ::-1].T.reshape(-1)
+    columns = jnp.repeat(jnp.arange(n_pair)[::-1], n_pos)
+    angles = jnp.tile(tca.pinion_angle, n_pair)
+    up = (line[1:] >= 0) & (line[:-1] < 0)
+    i = jnp.argmax(up) + 1
+    step = tca.pinion_angle[1] - tca.pinion_angle[0]
+    return jnp.any(up), columns[i], angles[i] - step, angles[i], line[i - 1], line[i]
