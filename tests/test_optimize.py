@@ -19,7 +19,7 @@ import pytest
 
 import gearjax as gj
 from gearjax import optimize as go
-from gearjax.optimize.run import _batch_objective, _batch_value_and_grad
+from gearjax.optimize.batch import batch_objective as _batch_objective, batch_value_and_grad as _batch_value_and_grad
 from gearjax.papers.seed001 import paper_optimum
 
 POPULATION = 12

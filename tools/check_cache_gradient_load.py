@@ -29,7 +29,7 @@ jax.config.update("jax_enable_x64", True)
 import numpy as np
 import gearjax as gj
 from gearjax import optimize as go
-from gearjax.optimize.run import _batch_value_and_grad
+from gearjax.optimize.batch import batch_value_and_grad as _batch_value_and_grad
 from gearjax.papers.seed001 import paper_optimum, seed_pair
 
 gj.enable_compilation_cache(sys.argv[1], programs=False)

@@ -5,7 +5,7 @@
 The seed 001 pair at the `fast` preset, 1 000 N·m, 5 000 rpm (the objective of
 `tests/test_optimize.py`), at the two starts of its gradient test: seed 001's lower bounds
 and the lower bounds plus a quarter of the bounds' width. Prints F_s, the gradient of
-`gearjax.optimize.run._batch_value_and_grad` and central differences of
+`gearjax.optimize.batch.batch_value_and_grad` and central differences of
 `_batch_objective` in unit-cube coordinates (N per unit of each bound's width). Central
 differences straddle a jump where the step crosses a regime or candidate switch: compare
 where the two agree in order of magnitude and sign.
@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
-from gearjax.optimize.run import _batch_objective, _batch_value_and_grad  # noqa: E402
+from gearjax.optimize.batch import batch_objective as _batch_objective, batch_value_and_grad as _batch_value_and_grad  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
 BATCH = 12  # the batch of `tests/test_optimize.py`: the same program

@@ -101,7 +101,7 @@ def certify(objective: Objective, designs, values=None, *, accuracy="reference",
         accuracy: the certification accuracy.
         top: the batch is `top + 1` designs (padded), one program per objective structure.
     """
-    from .run import _batch_objective
+    from .batch import batch_objective
 
     check_int("certify_top", top, 1)
     target = certification_accuracy(accuracy)
@@ -114,7 +114,7 @@ def certify(objective: Objective, designs, values=None, *, accuracy="reference",
     padded = np.concatenate([designs, np.repeat(designs[-1:], top + 1 - m, axis=0)])
 
     def evaluate(obj):
-        return np.asarray(_batch_objective(obj, jnp.asarray(padded)))[:m]
+        return np.asarray(batch_objective(obj, jnp.asarray(padded)))[:m]
 
     values = evaluate(objective) if values is None else np.asarray(values, dtype=float)
     same = objective.scene.accuracy == target

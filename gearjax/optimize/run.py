@@ -35,12 +35,12 @@ import numpy as np
 from .._custom_types import ArrayLike
 from .._validate import check_int
 from ..accuracy import Accuracy
-from ..runtime.cache import exclude_from_persistent_cache
 from ..io.progress import Progress, compiling
 from ..io.rundir import RunDirectory, atomic_write
 from .certification import CERTIFY_TOP, Certification, accuracy_name, candidates, certification_accuracy, certify
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
+from .batch import batch_objective, batch_value_and_grad
 from .objective import Objective
 from .space import DesignSpace
 
@@ -95,56 +95,7 @@ class OptimizationResult:
 
 
 # ---------------------------------------------------------------------------- compiled steps
-# The objective's batch (values, or values and gradients) is one compiled program shared by
-# every caller with the same objective structure and batch shape (the GA, the gradient
-# descent, `sensitivities`, the tests); the optimisers' own steps are small programs of
-# their own, so changing a GA setting does not recompile the objective.
-def _batch_objective(objective: Objective, designs):
-    """$J$ of designs (mm), shape (P, 6)."""
-    # A fixed dtype without weak typing, so every caller hits the same compiled program.
-    return _batch_objective_jit(objective, jnp.asarray(designs, objective.torques.dtype))
-
-
-def _batch_gradients(objective: Objective, designs):
-    """$J$ of designs (mm), shape (K, 6), and its gradients with respect to the design (mm),
-    the loads (N·mm), the pinion speed (rad/s) and the mesh errors (mm), one program.
-
-    Gradient descent and `sensitivities` share it: reverse mode costs about the same for
-    the four arguments as for the design alone, and one program compiles once (minutes).
-    With jaxlib < 0.12 it is kept out of JAX's persistent cache
-    (`gearjax.runtime.cache.exclude_from_persistent_cache`).
-    """
-    dtype = objective.torques.dtype
-    speed = jnp.asarray(objective.scene.operating.speed, dtype)
-    return _batch_gradients_jit(objective, jnp.asarray(designs, dtype), objective.torques, speed, objective.errors)
-
-
-def _batch_value_and_grad(objective: Objective, space: DesignSpace, units):
-    """$J$ and $\\partial J/\\partial x = w\\,\\partial J/\\partial y$ at unit-cube points, shape
-    (K, 6), through `_batch_gradients`."""
-    values, (grads, *_) = _batch_gradients(objective, space.to_design(jnp.asarray(units, objective.torques.dtype)))
-    return values, grads * space.width
-
-
-@eqx.filter_jit
-def _batch_objective_jit(objective, designs):
-    return objective.batch(designs).objective
-
-
-@eqx.filter_jit
-def _batch_gradients_jit(objective, designs, torques, speed, errors):
-    exclude_from_persistent_cache()
-
-    def J(design, torques, speed, errors):
-        o = eqx.tree_at(lambda o: (o.torques, o.scene.operating.speed, o.errors), objective, (torques, speed, errors))
-        return o(design)
-
-    def one(design):
-        return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speed, errors)
-
-    return jax.lax.map(one, designs, batch_size=objective.batch_size)
-
-
+# The optimisers' own steps are small programs of their own (`batch` holds the objective's).
 _ga_ask = eqx.filter_jit(ga_ask)
 _ga_tell = eqx.filter_jit(ga_tell)
 _gradient_step = eqx.filter_jit(gradient_step)
@@ -153,13 +104,13 @@ _gradient_step = eqx.filter_jit(gradient_step)
 def _ga_generation(objective: Objective, space: DesignSpace, config: GAConfig, state: GAState):
     unit, state = _ga_ask(state, config)
     designs = space.to_design(unit)
-    values = _batch_objective(objective, designs)
+    values = batch_objective(objective, designs)
     return _ga_tell(state, unit, values, config), designs, values
 
 
 def _gradient_iteration(objective: Objective, space: DesignSpace, config: GradientConfig, state: GradientState):
     designs = space.to_design(state.position)
-    values, grads = _batch_value_and_grad(objective, space, state.position)
+    values, grads = batch_value_and_grad(objective, space, state.position)
     return _gradient_step(state, values, grads, config), designs, values
 
 
@@ -191,8 +142,8 @@ def _initial_objective(method: str, objective: Objective, space: DesignSpace, de
     (the batch holds copies of the design: a few evaluations instead of a compilation)."""
     tiled = jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype), (batch, 6))
     if method == "ga":
-        return float(_batch_objective(objective, tiled)[0])
-    return float(_batch_value_and_grad(objective, space, space.to_unit(tiled))[0][0])
+        return float(batch_objective(objective, tiled)[0])
+    return float(batch_value_and_grad(objective, space, space.to_unit(tiled))[0][0])
 
 
 def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch,

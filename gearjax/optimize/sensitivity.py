@@ -19,7 +19,7 @@ import numpy as np
 
 from .._custom_types import ArrayLike
 from .objective import Objective
-from .run import _batch_gradients
+from .batch import batch_gradients
 from .space import PARAMETERS, SCENE_KEYS, DesignSpace
 
 _ERRORS = (("base_pitch_deviation", "base_pitch_deviation_um"), ("pitch_deviation", "pitch_deviation_um"),
@@ -29,7 +29,7 @@ _ERRORS = (("base_pitch_deviation", "base_pitch_deviation_um"), ("pitch_deviatio
 def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | None = None) -> dict | list[dict]:
     """Gradient of the objective at `design` (mm, shape (6,)), or at each of several designs
     (shape (K, 6)) in one compiled call: the program that gradient descent runs with K
-    starts (`gearjax.optimize.run._batch_gradients`), so sensitivities at as many designs as
+    starts (`gearjax.optimize.batch.batch_gradients`), so sensitivities at as many designs as
     the descent has starts cost no compilation after a descent, and none before one.
 
     Args:
@@ -52,7 +52,7 @@ def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | 
         raise ValueError(f"design must have shape (6,) or (K, 6) (y1..y6, mm); got shape {designs.shape}")
     if not np.all(np.isfinite(designs)):
         raise ValueError("design must be finite (y1..y6, mm)")
-    values, (g_design, g_torque, g_speed, g_errors) = _batch_gradients(objective, designs.reshape(-1, 6))
+    values, (g_design, g_torque, g_speed, g_errors) = batch_gradients(objective, designs.reshape(-1, 6))
     speed = float(objective.scene.operating.speed)
     rpm = 2.0 * np.pi / 60.0  # rad/s per rpm
     results = []

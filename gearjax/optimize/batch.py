@@ -1,0 +1,63 @@
+"""The objective over a batch of designs, as compiled programs shared by every caller.
+
+The objective's batch (values, or values and gradients) is one compiled program per
+objective structure and batch shape, shared by the GA, the gradient descent,
+`sensitivities`, certification and the tests; the optimisers' own steps are small programs
+of their own, so changing a GA setting does not recompile the objective.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..runtime.cache import exclude_from_persistent_cache
+from .objective import Objective
+from .space import DesignSpace
+
+
+def batch_objective(objective: Objective, designs):
+    """$J$ of designs (mm), shape (P, 6)."""
+    # A fixed dtype without weak typing, so every caller hits the same compiled program.
+    return _objective_jit(objective, jnp.asarray(designs, objective.torques.dtype))
+
+
+def batch_gradients(objective: Objective, designs):
+    """$J$ of designs (mm), shape (K, 6), and its gradients with respect to the design (mm),
+    the loads (N·mm), the pinion speed (rad/s) and the mesh errors (mm), one program.
+
+    Gradient descent and `sensitivities` share it: reverse mode costs about the same for
+    the four arguments as for the design alone, and one program compiles once (minutes).
+    With jaxlib < 0.12 it is kept out of JAX's persistent cache
+    (`gearjax.runtime.cache.exclude_from_persistent_cache`).
+    """
+    dtype = objective.torques.dtype
+    speed = jnp.asarray(objective.scene.operating.speed, dtype)
+    return _gradients_jit(objective, jnp.asarray(designs, dtype), objective.torques, speed, objective.errors)
+
+
+def batch_value_and_grad(objective: Objective, space: DesignSpace, units):
+    """$J$ and $\\partial J/\\partial x = w\\,\\partial J/\\partial y$ at unit-cube points, shape
+    (K, 6), through `batch_gradients`."""
+    values, (grads, *_) = batch_gradients(objective, space.to_design(jnp.asarray(units, objective.torques.dtype)))
+    return values, grads * space.width
+
+
+@eqx.filter_jit
+def _objective_jit(objective, designs):
+    return objective.batch(designs).objective
+
+
+@eqx.filter_jit
+def _gradients_jit(objective, designs, torques, speed, errors):
+    exclude_from_persistent_cache()
+
+    def J(design, torques, speed, errors):
+        o = eqx.tree_at(lambda o: (o.torques, o.scene.operating.speed, o.errors), objective, (torques, speed, errors))
+        return o(design)
+
+    def one(design):
+        return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speed, errors)
+
+    return jax.lax.map(one, designs, batch_size=objective.batch_size)
