@@ -48,6 +48,7 @@ keeps the values it was resolved with.
 """
 
 import abc
+import dataclasses
 import functools
 from collections.abc import Callable
 from typing import ClassVar
@@ -62,6 +63,29 @@ from .._numerics import as_float, perp2, rotate2, safe_divide, safe_norm
 
 #: Stages beyond the rigid TCA that a family may support.
 EFFECTS = ("ltca", "impact")
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneFileSpec:
+    """How a family is written in a scene file's `[pair]` section (`gearjax.io.scene_file`
+    reads it; adding a family adds no code there).
+
+    Attributes:
+        family: the value of `family = "..."`.
+        description: the pair in an engineer's words (reports).
+        keys: file key -> (constructor keyword, kind, factor to engine units); kind is
+            "teeth" (two integers), "number", "number_or_pair" (one number, or one per
+            gear) or "text".
+        required: keys a file must give.
+        fixed: keys that other families accept but this one fixes, with why (the error
+            reads `<why> for family = "..."`).
+    """
+
+    family: str
+    description: str
+    keys: dict
+    required: tuple[str, ...] = ("teeth", "normal_module")
+    fixed: tuple[tuple[str, ...], str] = ((), "")
 
 
 def derived(method):
@@ -102,6 +126,8 @@ class AbstractGearPair(eqx.Module):
         supported_effects: the stages beyond the rigid TCA it supports, a subset of
             `EFFECTS` = ("ltca", "impact"); `Scene` refuses the others.
         effects_note: what to use instead of an unsupported stage (for the error message).
+        scene_file: its `[pair]` keys in scene files (`SceneFileSpec`), or None for a
+            family that scene files cannot name.
     """
 
     teeth: AbstractVar[tuple[int, int]]
@@ -110,6 +136,7 @@ class AbstractGearPair(eqx.Module):
 
     supported_effects: AbstractClassVar[frozenset[str]]
     effects_note: ClassVar[str] = ""
+    scene_file: ClassVar[SceneFileSpec | None] = None
 
     @abc.abstractmethod
     def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":

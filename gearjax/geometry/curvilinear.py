@@ -30,7 +30,8 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from .involute_section import AbstractInvolutePair
+from ._base import SceneFileSpec
+from .involute_section import SECTION_SCENE_KEYS, AbstractInvolutePair
 
 
 class CurvilinearGearPair(AbstractInvolutePair):
@@ -48,6 +49,10 @@ class CurvilinearGearPair(AbstractInvolutePair):
 
     #: The lead is curved: the TCA refines the peak between slices for flank contacts only.
     linear_lead: ClassVar[bool] = False
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
+        "curvilinear", "involute curvilinear-tooth gear pair",
+        {**SECTION_SCENE_KEYS, "tooth_trace_radius": ("tooth_trace_radius", "number", 1.0)},
+    )
 
     tooth_trace_radius: Scalar
 

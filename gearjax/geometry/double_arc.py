@@ -42,7 +42,7 @@ import numpy as np
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from ._base import AbstractFlankPair, AbstractGearPair, derived
+from ._base import AbstractFlankPair, AbstractGearPair, SceneFileSpec, derived
 from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, generated_point
 
 ZONE_NAMES = ("convex driving tooth", "concave driving tooth")
@@ -80,6 +80,18 @@ class DoubleArcGearPair(AbstractGearPair):
     effects_note: ClassVar[str] = (
         "loaded contact of point-contact gears is not implemented; use the rigid TCA (no "
         "torque) and gearjax.papers.four_state for the seed's four-state impact model"
+    )
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
+        "double_circular_arc", "double-circular-arc gear pair (GB/T 12759)",
+        {
+            "teeth": ("teeth", "teeth", 1.0),
+            "normal_module": ("normal_module", "number", 1.0),
+            "helix_angle_deg": ("helix_angle_deg", "number", 1.0),
+            "face_width": ("face_width", "number", 1.0),
+            "axial_pitch_error_um": ("axial_pitch_error", "number", 1e-3),
+        },
+        fixed=(("pressure_angle_deg", "profile_shift", "center_distance", "addendum_coefficient",
+                "dedendum_coefficient", "root_radius_coefficient"), "is fixed by the GB/T 12759 rack"),
     )
 
     def __init__(

@@ -15,7 +15,8 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_choice
-from .involute_section import AbstractInvolutePair
+from ._base import SceneFileSpec
+from .involute_section import SECTION_SCENE_KEYS, AbstractInvolutePair
 
 
 class InvoluteGearPair(AbstractInvolutePair):
@@ -31,6 +32,10 @@ class InvoluteGearPair(AbstractInvolutePair):
     """
 
     linear_lead: ClassVar[bool] = True
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
+        "involute", "involute helical gear pair",
+        {**SECTION_SCENE_KEYS, "helix_angle_deg": ("helix_angle_deg", "number", 1.0), "hand": ("hand", "text", 1.0)},
+    )
 
     hand: int = eqx.field(static=True)
 

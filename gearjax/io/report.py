@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from .._solution import RESULTS, enum_message, enum_name
+from ..geometry import FAMILIES
 from ..pipeline import SimulationResult
 from ..scene import Scene
 from ..tca import ContactKind
@@ -137,11 +138,7 @@ def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None 
 
 
 #: The families and compliance models in an engineer's words (`summary`).
-FAMILY_WORDS = {
-    "InvoluteGearPair": "involute helical gear pair",
-    "CurvilinearGearPair": "involute curvilinear-tooth gear pair",
-    "DoubleArcGearPair": "double-circular-arc gear pair (GB/T 12759)",
-}
+FAMILY_WORDS = {cls.__name__: cls.scene_file.description for cls in FAMILIES}
 COMPLIANCE_WORDS = {
     "SliceCompliance": "tooth compliance per face slice: bending, shear, foundation, Hertz",
     "IsoCompliance": "ISO 6336-1 line stiffness",

@@ -12,10 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from ..accuracy import Accuracy
+from ..geometry import FAMILIES
 from ..geometry.errors import MeshErrors
-from ..geometry.curvilinear import CurvilinearGearPair
-from ..geometry.double_arc import DoubleArcGearPair
-from ..geometry.involute import InvoluteGearPair
 from ..geometry.modification import FlankModification
 from ..ltca import IsoCompliance, SliceCompliance
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
@@ -63,11 +61,6 @@ effects = ["impact"]         # LTCA runs whenever a torque is given
 
 #: `[optimize]` is read by `gearjax.optimize.settings` (the `gearjax optimize` command).
 _SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis", "optimize")
-_PAIR_KEYS = {
-    "family", "teeth", "normal_module", "pressure_angle_deg", "helix_angle_deg", "hand",
-    "face_width", "profile_shift", "center_distance", "addendum_coefficient",
-    "dedendum_coefficient", "root_radius_coefficient", "tooth_trace_radius", "axial_pitch_error_um",
-}
 _MOD_KEYS = {
     "root_relief_um": ("root_relief", 1e-3),
     "tip_relief_um": ("tip_relief", 1e-3),
@@ -162,54 +155,58 @@ def scene_from_dict(data: dict) -> Scene:
 
 
 def _pair_from(p: dict):
-    """[pair]: the gear pair of the family it names (default "involute")."""
-    _unknown("pair", p, _PAIR_KEYS)
+    """[pair]: the gear pair of the family it names (default "involute"), read as the
+    family declares (`AbstractGearPair.scene_file`)."""
+    _unknown("pair", p, _pair_keys())
     family = p.get("family", "involute")
-    families = ("involute", "curvilinear", "double_circular_arc")
-    if family not in families:
-        raise _fail("pair.family", f"must be one of {', '.join(repr(f) for f in families)}; got {family!r}")
-    _check_family_keys(p, family)
-    teeth = p["teeth"]
-    if not isinstance(teeth, list) or len(teeth) != 2 or not all(isinstance(t, int) and not isinstance(t, bool) for t in teeth):
-        raise _fail("pair.teeth", f"must be a list of two integers; got {teeth!r}")
-    kwargs: dict[str, Any] = {"teeth": tuple(teeth)}
-    for key in ("normal_module", "pressure_angle_deg", "helix_angle_deg", "face_width", "center_distance"):
-        if key in p:
-            kwargs[key] = _number("pair", key, p[key])
-    for key in ("profile_shift", "addendum_coefficient", "dedendum_coefficient", "root_radius_coefficient"):
-        if key in p:
-            kwargs[key] = _numbers("pair", key, p[key], 2) if isinstance(p[key], list) else _number("pair", key, p[key])
-    if "hand" in p:
-        kwargs["hand"] = p["hand"]
-    if family == "double_circular_arc":
-        if "axial_pitch_error_um" in p:
-            kwargs["axial_pitch_error"] = _number("pair", "axial_pitch_error_um", p["axial_pitch_error_um"]) * 1e-3
-        return _build("pair", DoubleArcGearPair, **kwargs)
-    if family == "curvilinear":
-        if "tooth_trace_radius" in p:
-            kwargs["tooth_trace_radius"] = _number("pair", "tooth_trace_radius", p["tooth_trace_radius"])
-        return _build("pair", CurvilinearGearPair, **kwargs)
-    return _build("pair", InvoluteGearPair, **kwargs)
+    by_name = {cls.scene_file.family: cls for cls in FAMILIES}
+    if family not in by_name:
+        raise _fail("pair.family", f"must be one of {', '.join(repr(f) for f in by_name)}; got {family!r}")
+    cls = by_name[family]
+    spec = cls.scene_file
+    _check_family_keys(p, spec)
+    kwargs: dict[str, Any] = {}
+    for key, value in p.items():
+        if key == "family":
+            continue
+        keyword, kind, factor = spec.keys[key]
+        kwargs[keyword] = _read_pair_value(key, kind, value, factor)
+    return _build("pair", cls, **kwargs)
 
 
-def _check_family_keys(p: dict, family: str) -> None:
-    """Keys that belong to another family, or that a family fixes, are errors; `teeth` and
-    `normal_module` are required."""
-    only = {
-        "involute": ("hand",), "curvilinear": ("tooth_trace_radius",), "double_circular_arc": ("axial_pitch_error_um",),
-    }
-    for other, keys in only.items():
-        for key in keys:
-            if other != family and key in p:
-                raise _fail(f"pair.{key}", f"applies to family = '{other}' only")
-    if family == "curvilinear" and "helix_angle_deg" in p:
-        raise _fail("pair.helix_angle_deg", "applies to the involute and double_circular_arc families only")
-    if family == "double_circular_arc":
-        for key in ("pressure_angle_deg", "profile_shift", "center_distance", "addendum_coefficient",
-                    "dedendum_coefficient", "root_radius_coefficient"):
-            if key in p:
-                raise _fail(f"pair.{key}", "is fixed by the GB/T 12759 rack for family = 'double_circular_arc'")
-    for required in ("teeth", "normal_module"):
+def _pair_keys() -> set:
+    """Every key any family accepts in [pair], and `family`."""
+    return {"family"}.union(*(cls.scene_file.keys for cls in FAMILIES))
+
+
+def _read_pair_value(key: str, kind: str, value: Any, factor: float):
+    """One [pair] value of a `SceneFileSpec` kind, in engine units."""
+    if kind == "teeth":
+        if not isinstance(value, list) or len(value) != 2 or not all(
+                isinstance(t, int) and not isinstance(t, bool) for t in value):
+            raise _fail(f"pair.{key}", f"must be a list of two integers; got {value!r}")
+        return tuple(value)
+    if kind == "text":
+        return value
+    if kind == "number_or_pair" and isinstance(value, list):
+        return tuple(v * factor for v in _numbers("pair", key, value, 2))
+    return _number("pair", key, value) * factor
+
+
+def _check_family_keys(p: dict, spec) -> None:
+    """Keys that belong to other families, or that this family fixes, are errors; the
+    family's required keys must be there."""
+    fixed, why = spec.fixed
+    for key in p:
+        if key == "family" or key in spec.keys:
+            continue
+        if key in fixed:
+            raise _fail(f"pair.{key}", f"{why} for family = '{spec.family}'")
+        owners = [cls.scene_file.family for cls in FAMILIES if key in cls.scene_file.keys]
+        if len(owners) == 1:
+            raise _fail(f"pair.{key}", f"applies to family = '{owners[0]}' only")
+        raise _fail(f"pair.{key}", f"applies to the {' and '.join(owners)} families only")
+    for required in spec.required:
         if required not in p:
             raise _fail(f"pair.{required}", "missing required field")
 
