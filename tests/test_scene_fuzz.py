@@ -11,13 +11,19 @@ thousand examples (2 000, derandomised: the same each run) take about a minute.
 from __future__ import annotations
 
 import copy
+import inspect
 import math
 import tomllib
+from pathlib import Path
 
+import jax
+import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gearjax.io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, scene_from_dict
+from gearjax.geometry import FAMILIES
+from gearjax.io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, pair_reference, scene_from_dict
 
 CURVILINEAR = """
 [pair]
@@ -149,3 +155,42 @@ def test_mutated_scene_files_are_a_scene_or_one_line_naming_the_field(data):
         message = str(err)
         assert "\n" not in message and message.strip() == message and message, repr(message)
         assert message.startswith("["), message  # names its section: "[section] key: ..."
+
+
+def test_pair_reference_in_the_docs_is_the_generated_one():
+    """`docs/scene_files.md` holds the `[pair]` table that the families' declarations give
+    (`python tools/scene_file_reference.py --write` regenerates it)."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "scene_files.md").read_text()
+    block = page.split("<!-- pair-keys:start (generated: tools/scene_file_reference.py) -->\n", 1)[1]
+    assert block.split("<!-- pair-keys:end -->", 1)[0] == pair_reference()
+
+
+@pytest.mark.parametrize("cls", FAMILIES, ids=lambda cls: cls.scene_file.family)
+def test_each_declared_pair_key_reaches_its_constructor_keyword(cls):
+    """Every `[pair]` key a family declares names a keyword of its constructor, and a file
+    that gives each optional key a value off its default builds the pair the constructor
+    builds from the same values (units converted): the declaration is what is read."""
+    spec = cls.scene_file
+    parameters = inspect.signature(cls.__init__).parameters
+    table = {"family": spec.family, "teeth": [24, 26], "normal_module": 3.0}
+    kwargs = {"teeth": (24, 26), "normal_module": 3.0}
+    for key, (keyword, kind, unit, factor) in spec.keys.items():
+        assert keyword in parameters, (key, keyword)
+        # the key's name carries its unit where it is not the engine's (mm, rad via *_deg)
+        assert (unit, factor) == (("µm", 1e-3) if key.endswith("_um") else ("deg", 1.0) if key.endswith("_deg")
+                                  else (unit, 1.0)), (key, unit, factor)
+        if key in table or kind in ("teeth", "text") or keyword == "center_distance":
+            continue
+        default = parameters[keyword].default
+        base = default[0] if isinstance(default, tuple) else default
+        value = 1.02 * base / factor if base else 0.1  # 2 % off the default, or 0.1 for a zero one
+        table[key] = value
+        kwargs[keyword] = value * factor
+    pair = scene_from_dict({"pair": table}).pair
+    expected = cls(**kwargs)
+    for name in ("teeth", "face_width", "normal_module"):
+        np.testing.assert_allclose(np.asarray(getattr(pair, name)), np.asarray(getattr(expected, name)), rtol=1e-15)
+    leaves, expected_leaves = jax.tree_util.tree_leaves(pair), jax.tree_util.tree_leaves(expected)
+    assert len(leaves) == len(expected_leaves)
+    for a, b in zip(leaves, expected_leaves):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-15)

@@ -73,12 +73,12 @@ class SceneFileSpec:
     Attributes:
         family: the value of `family = "..."`.
         description: the pair in an engineer's words (reports).
-        keys: file key -> (constructor keyword, kind, factor to engine units); kind is
-            "teeth" (two integers), "number", "number_or_pair" (one number, or one per
-            gear) or "text".
+        keys: file key -> (constructor keyword, kind, unit in the file, factor to engine
+            units); kind is "teeth" (two integers), "number", "number_or_pair" (one
+            number, or one per gear) or "text"; the constructor's default is the key's.
         required: keys a file must give.
         fixed: keys that other families accept but this one fixes, with why (the error
-            reads `<why> for family = "..."`).
+            reads `is <why> for family = "..."`).
     """
 
     family: str

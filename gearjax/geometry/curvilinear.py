@@ -51,7 +51,7 @@ class CurvilinearGearPair(AbstractInvolutePair):
     linear_lead: ClassVar[bool] = False
     scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
         "curvilinear", "involute curvilinear-tooth gear pair",
-        {**SECTION_SCENE_KEYS, "tooth_trace_radius": ("tooth_trace_radius", "number", 1.0)},
+        {**SECTION_SCENE_KEYS, "tooth_trace_radius": ("tooth_trace_radius", "number", "mm", 1.0)},
     )
 
     tooth_trace_radius: Scalar

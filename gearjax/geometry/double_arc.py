@@ -84,14 +84,14 @@ class DoubleArcGearPair(AbstractGearPair):
     scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
         "double_circular_arc", "double-circular-arc gear pair (GB/T 12759)",
         {
-            "teeth": ("teeth", "teeth", 1.0),
-            "normal_module": ("normal_module", "number", 1.0),
-            "helix_angle_deg": ("helix_angle_deg", "number", 1.0),
-            "face_width": ("face_width", "number", 1.0),
-            "axial_pitch_error_um": ("axial_pitch_error", "number", 1e-3),
+            "teeth": ("teeth", "teeth", "", 1.0),
+            "normal_module": ("normal_module", "number", "mm", 1.0),
+            "helix_angle_deg": ("helix_angle_deg", "number", "deg", 1.0),
+            "face_width": ("face_width", "number", "mm", 1.0),
+            "axial_pitch_error_um": ("axial_pitch_error", "number", "µm", 1e-3),
         },
         fixed=(("pressure_angle_deg", "profile_shift", "center_distance", "addendum_coefficient",
-                "dedendum_coefficient", "root_radius_coefficient"), "is fixed by the GB/T 12759 rack"),
+                "dedendum_coefficient", "root_radius_coefficient"), "fixed by the GB/T 12759 rack"),
     )
 
     def __init__(

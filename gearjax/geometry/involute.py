@@ -34,7 +34,7 @@ class InvoluteGearPair(AbstractInvolutePair):
     linear_lead: ClassVar[bool] = True
     scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
         "involute", "involute helical gear pair",
-        {**SECTION_SCENE_KEYS, "helix_angle_deg": ("helix_angle_deg", "number", 1.0), "hand": ("hand", "text", 1.0)},
+        {**SECTION_SCENE_KEYS, "helix_angle_deg": ("helix_angle_deg", "number", "deg", 1.0), "hand": ("hand", "text", "", 1.0)},
     )
 
     hand: int = eqx.field(static=True)

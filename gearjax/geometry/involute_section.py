@@ -44,17 +44,17 @@ from .involute_curve import half_tooth_angle, involute_point
 
 
 #: Scene-file keys of the involute section (`SceneFileSpec.keys`) that the involute
-#: families share: (constructor keyword, kind, factor to engine units).
+#: families share: (constructor keyword, kind, unit in the file, factor to engine units).
 SECTION_SCENE_KEYS = {
-    "teeth": ("teeth", "teeth", 1.0),
-    "normal_module": ("normal_module", "number", 1.0),
-    "pressure_angle_deg": ("pressure_angle_deg", "number", 1.0),
-    "face_width": ("face_width", "number", 1.0),
-    "center_distance": ("center_distance", "number", 1.0),
-    "profile_shift": ("profile_shift", "number_or_pair", 1.0),
-    "addendum_coefficient": ("addendum_coefficient", "number_or_pair", 1.0),
-    "dedendum_coefficient": ("dedendum_coefficient", "number_or_pair", 1.0),
-    "root_radius_coefficient": ("root_radius_coefficient", "number_or_pair", 1.0),
+    "teeth": ("teeth", "teeth", "", 1.0),
+    "normal_module": ("normal_module", "number", "mm", 1.0),
+    "pressure_angle_deg": ("pressure_angle_deg", "number", "deg", 1.0),
+    "face_width": ("face_width", "number", "mm", 1.0),
+    "center_distance": ("center_distance", "number", "mm", 1.0),
+    "profile_shift": ("profile_shift", "number_or_pair", "", 1.0),
+    "addendum_coefficient": ("addendum_coefficient", "number_or_pair", "", 1.0),
+    "dedendum_coefficient": ("dedendum_coefficient", "number_or_pair", "", 1.0),
+    "root_radius_coefficient": ("root_radius_coefficient", "number_or_pair", "", 1.0),
 }
 
 

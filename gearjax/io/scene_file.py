@@ -169,9 +169,55 @@ def _pair_from(p: dict):
     for key, value in p.items():
         if key == "family":
             continue
-        keyword, kind, factor = spec.keys[key]
+        keyword, kind, _, factor = spec.keys[key]
         kwargs[keyword] = _read_pair_value(key, kind, value, factor)
     return _build("pair", cls, **kwargs)
+
+
+def pair_reference() -> str:
+    """The `[pair]` keys of every family as a Markdown table, generated from the families'
+    declarations (`AbstractGearPair.scene_file`) and their constructors' defaults, so the
+    reference cannot drift from the code (`docs/scene_files.md` holds it; `python
+    tools/scene_file_reference.py --write` regenerates it)."""
+    import inspect
+
+    specs = [cls.scene_file for cls in FAMILIES]
+    defaults = [inspect.signature(cls.__init__).parameters for cls in FAMILIES]
+    keys = list(dict.fromkeys(key for spec in specs for key in spec.keys))
+    header = "| key | unit | " + " | ".join(f"`{spec.family}`" for spec in specs) + " |"
+    rows = [header, "|---|---|" + "---|" * len(specs)]
+    for key in keys:
+        unit = next(spec.keys[key][2] for spec in specs if key in spec.keys)
+        cells = []
+        for spec, parameters in zip(specs, defaults):
+            if key in spec.keys:
+                keyword, _, _, factor = spec.keys[key]
+                default = parameters[keyword].default
+                if key in spec.required:
+                    cells.append("required")
+                elif default is None:
+                    cells.append("optional")
+                else:
+                    value = [v / factor for v in default] if isinstance(default, tuple) else default
+                    value = value / factor if isinstance(value, float) else value
+                    cells.append(f"default `{_toml(value)}`")
+            elif key in spec.fixed[0]:
+                cells.append("fixed")
+            else:
+                cells.append("—")
+        rows.append(f"| `{key}` | {unit} | " + " | ".join(cells) + " |")
+    notes = [f"`{spec.family}`: {', '.join(f'`{k}`' for k in spec.fixed[0])}, {spec.fixed[1]}." for spec in specs
+             if spec.fixed[0]]
+    return "\n".join(rows) + ("\n\nFixed: " + " ".join(notes) if notes else "") + "\n"
+
+
+def _toml(value) -> str:
+    """A default as it is written in a scene file."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(value)
 
 
 def _pair_keys() -> set:
@@ -201,7 +247,7 @@ def _check_family_keys(p: dict, spec) -> None:
         if key == "family" or key in spec.keys:
             continue
         if key in fixed:
-            raise _fail(f"pair.{key}", f"{why} for family = '{spec.family}'")
+            raise _fail(f"pair.{key}", f"is {why} for family = '{spec.family}'")
         owners = [cls.scene_file.family for cls in FAMILIES if key in cls.scene_file.keys]
         if len(owners) == 1:
             raise _fail(f"pair.{key}", f"applies to family = '{owners[0]}' only")
