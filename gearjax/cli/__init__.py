@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import re
 import sys
 
@@ -127,111 +126,21 @@ def _caches(args: argparse.Namespace):
         jax.config.update(option, previous)
 
 
-def _run(args: argparse.Namespace) -> int:
-    from ..io.report import result_dict, summary
-    from ..pipeline import simulate
-    from ..papers.seed001 import SEED_001_NOTE
-    from ..io.scene_file import SceneFileError, default_scene, load_scene
-
-    try:
-        if args.scene is None:
-            scene, _ = default_scene()
-            notes = [SEED_001_NOTE]
-        else:
-            scene, _ = load_scene(args.scene)
-            notes = []
-    except SceneFileError as err:
-        print(f"gearjax: error: {err}", file=sys.stderr)
-        return 2
-    if "impact" not in scene.effects and float(scene.operating.speed) > 0.0:
-        notes.append(
-            "[operating] speed_rpm is used by the mesh-in impact only, which this scene does not compute; "
-            "add effects = [\"impact\"] to [analysis] (with a torque) to compute it")
-    from ..runtime.resources import MemoryEstimateError
-
-    # The summary reports every stage's result code, so a failed stage is shown, not raised.
-    from ..io.progress import compiling
-
-    try:
-        with compiling(f"the {_program_kind(scene)} program for this scene structure"):
-            result = simulate(scene, throw=False)
-    except MemoryEstimateError as err:
-        print(f"gearjax: error: {err}", file=sys.stderr)
-        return 2
-    out = result_dict(scene, result, notes)
-    if args.json:
-        print(json.dumps(out, indent=2))
-    else:
-        print(summary(out))
-    return 0
-
-
-def _program_kind(scene) -> str:
-    """The last stage of a scene's program, in words."""
-    if "impact" in scene.effects:
-        return "mesh-in impact"
-    return "loaded contact" if "ltca" in scene.effects else "tooth contact"
-
-
-def _reproduce(args: argparse.Namespace) -> int:
-    from ..papers import curvilinear, double_arc
-
-    if args.paper == "dca":
-        out = double_arc.reproduce(cross_check=args.cross_check)
-        print(json.dumps(out, indent=2) if args.json else double_arc.summary(out))
-        return 0
-    out = curvilinear.reproduce()
-    print(json.dumps(out, indent=2) if args.json else curvilinear.summary(out))
-    return 0
-
-
-def _optimize(args: argparse.Namespace) -> int:
-    from .optimize import run_command
-
-    return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
-
-
-def _sweep(args: argparse.Namespace) -> int:
-    from .sweep import run_command
-
-    return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot,
-                       chunk=args.chunk, resume=args.resume, quiet=args.quiet)
+#: The sub-commands, each a module of this package with `HELP`, `add_arguments(parser)` and
+#: `run(args) -> exit status`; a new command is a module and a name here.
+COMMANDS = ("run", "reproduce", "optimize", "sweep")
 
 
 def main(argv: list[str] | None = None) -> int:
+    import importlib
+
     parser = _Parser(prog="gearjax", description="Differentiable gear contact engine.")
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="simulate a scene (default: the built-in seed 001 scene)")
-    run.add_argument("scene", nargs="?", help="TOML scene file")
-    run.add_argument("--json", action="store_true", help="print one JSON object")
-    rep = sub.add_parser("reproduce", help="a paper's quantities beside gearjax's")
-    rep.add_argument("paper", choices=["curvilinear", "dca"], help="curvilinear: seed 002; dca: seeds 000/003")
-    rep.add_argument("--json", action="store_true", help="print one JSON object")
-    rep.add_argument(
-        "--cross-check", action="store_true",
-        help="dca: also run the general TCA on the generated surfaces with the seed's pitch error (~2 min)",
-    )
-    opt = sub.add_parser("optimize", help="tune the pinion modification for a small mesh-in impact ([optimize] section)")
-    opt.add_argument("scene", nargs="?", help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
-    opt.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
-    opt.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")
-    opt.add_argument("--resume", action="store_true", help="continue the run in --out")
-    opt.add_argument("--json", action="store_true", help="print one JSON object")
-    opt.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
-    swp = sub.add_parser("sweep", help="mesh-in impact over a torque x speed grid, in one compiled call")
-    swp.add_argument("scene", nargs="?", help="TOML scene file with effects = [\"impact\"] (default: the built-in scene)")
-    swp.add_argument("--torque-Nm", required=True, dest="torque_Nm",
-                     help="pinion torques (N m): 100,400,1000 or start:stop:count")
-    swp.add_argument("--speed-rpm", required=True, dest="speed_rpm",
-                     help="pinion speeds (rpm): 1000,5000 or start:stop:count")
-    swp.add_argument("--chunk", type=int, help="torques per chunk (default: all at once); each chunk is written when done")
-    swp.add_argument("--out", help="run directory: each finished chunk, then sweep.json and sweep.npz (and the plots)")
-    swp.add_argument("--resume", action="store_true", help="continue the killed or finished run in --out")
-    swp.add_argument("--json", action="store_true", help="print one JSON object")
-    swp.add_argument("--plot", action="store_true", help="also write sweep_force_map.png and sweep_harris.png (needs --out)")
-    swp.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
-    for command in (run, rep, opt, swp):
+    modules = {name: importlib.import_module(f".{name}", __name__) for name in COMMANDS}
+    for name, module in modules.items():
+        command = sub.add_parser(name, help=module.HELP)
+        module.add_arguments(command)
         command.add_argument(
             "--no-cache", action="store_true",
             help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
@@ -239,10 +148,4 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(_attach_values(sys.argv[1:] if argv is None else list(argv)))
     _enable_x64()
     with _caches(args):
-        if args.command == "run":
-            return _run(args)
-        if args.command == "optimize":
-            return _optimize(args)
-        if args.command == "sweep":
-            return _sweep(args)
-        return _reproduce(args)
+        return modules[args.command].run(args)

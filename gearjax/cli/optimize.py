@@ -15,6 +15,24 @@ from ..optimize.settings import OptimizeSettings, SettingsError
 from ..optimize.space import design_dict
 
 
+#: the sub-command's help line
+HELP = "tune the pinion modification for a small mesh-in impact ([optimize] section)"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", nargs="?",
+                        help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
+    parser.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
+    parser.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")
+    parser.add_argument("--resume", action="store_true", help="continue the run in --out")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
+
+
+def run(args) -> int:
+    return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
+
+
 def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool) -> int:
     from ..io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene, read_scene_text
 

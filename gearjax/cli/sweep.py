@@ -19,6 +19,29 @@ from pathlib import Path
 import numpy as np
 
 
+#: the sub-command's help line
+HELP = "mesh-in impact over a torque x speed grid, in one compiled call"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", nargs="?", help="TOML scene file with effects = [\"impact\"] (default: the built-in scene)")
+    parser.add_argument("--torque-Nm", required=True, dest="torque_Nm",
+                        help="pinion torques (N m): 100,400,1000 or start:stop:count")
+    parser.add_argument("--speed-rpm", required=True, dest="speed_rpm",
+                        help="pinion speeds (rpm): 1000,5000 or start:stop:count")
+    parser.add_argument("--chunk", type=int, help="torques per chunk (default: all at once); each chunk is written when done")
+    parser.add_argument("--out", help="run directory: each finished chunk, then sweep.json and sweep.npz (and the plots)")
+    parser.add_argument("--resume", action="store_true", help="continue the killed or finished run in --out")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--plot", action="store_true", help="also write sweep_force_map.png and sweep_harris.png (needs --out)")
+    parser.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
+
+
+def run(args) -> int:
+    return run_command(args.scene, args.torque_Nm, args.speed_rpm, args.out, args.json, args.plot,
+                       chunk=args.chunk, resume=args.resume, quiet=args.quiet)
+
+
 class ListError(ValueError):
     """A bad value list on the command line; the message names the option."""
 
