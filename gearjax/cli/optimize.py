@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..optimize.certification import accuracy_name
+from ..optimize.objective import QUANTITIES
 from ..optimize.run import genetic, gradient_descent
 from ..optimize.settings import OptimizeSettings, SettingsError
 from ..optimize.space import design_dict
@@ -61,7 +62,7 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
         return 2
     best_scene = Path(out) / "best_scene.toml"
     best_scene.write_text(best_scene_toml(data, result.best_design))
-    unit = "N" if objective.quantity == "force" else "mm/s"
+    unit = QUANTITIES[objective.quantity][0]
     cert = result.certification
     report = {
         "optimize": {

@@ -44,7 +44,12 @@ from ..impact import ImpactRegime
 from ..scene import Scene
 from .space import modification_from_design
 
-QUANTITIES = ("force", "velocity")
+#: The objective's quantities $q$: name -> (unit, what it is, its value from the impact's
+#: force (N) and normal velocity (mm/s)). A new quantity is an entry here.
+QUANTITIES = {
+    "force": ("N", "peak impact force F_s", lambda force, velocity: force),
+    "velocity": ("mm/s", "normal impact velocity |v_n|", lambda force, velocity: jnp.abs(velocity)),
+}
 AGGREGATES = ("mean", "max")
 
 
@@ -159,7 +164,7 @@ class Objective(eqx.Module):
             )
         if scene.modification is None:  # an unmodified pair: the search starts from it
             scene = dataclasses.replace(scene, modification=FlankModification())
-        check_choice("quantity (objective)", quantity, QUANTITIES)
+        check_choice("quantity (objective)", quantity, tuple(QUANTITIES))
         check_choice("aggregate", aggregate, AGGREGATES)
         check_int("batch_size", batch_size, 1)
         if torques is not None and torques_Nm is not None:
@@ -239,7 +244,7 @@ class Objective(eqx.Module):
 
         out = jax.vmap(per_sample, out_axes=1)(self.errors)
         force, velocity, edge, pressure, lte, ok = out
-        quantity = force if self.quantity == "force" else jnp.abs(velocity)
+        quantity = QUANTITIES[self.quantity][2](force, velocity)
         per_load = jnp.mean(quantity, axis=1)
         value = jnp.sum(self.weights * per_load) if self.aggregate == "mean" else jnp.max(per_load)
         if self.pressure_penalty is not None:

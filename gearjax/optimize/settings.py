@@ -117,7 +117,7 @@ class OptimizeSettings:
         if "method" in table:
             out["method"] = _choice("method", table["method"], METHODS)
         if "objective" in table:
-            out["objective"] = _choice("objective", table["objective"], QUANTITIES)
+            out["objective"] = _choice("objective", table["objective"], tuple(QUANTITIES))
         if "aggregate" in table:
             out["aggregate"] = _choice("aggregate", table["aggregate"], AGGREGATES)
         if "accuracy" in table:
