@@ -12,6 +12,7 @@ import numpy as np
 
 from .._solution import RESULTS, enum_message, enum_name
 from ..geometry import FAMILIES
+from ..ltca import COMPLIANCE_MODELS
 from ..pipeline import SimulationResult
 from ..scene import Scene
 from ..tca import ContactKind
@@ -139,10 +140,7 @@ def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None 
 
 #: The families and compliance models in an engineer's words (`summary`).
 FAMILY_WORDS = {cls.__name__: cls.scene_file.description for cls in FAMILIES}
-COMPLIANCE_WORDS = {
-    "SliceCompliance": "tooth compliance per face slice: bending, shear, foundation, Hertz",
-    "IsoCompliance": "ISO 6336-1 line stiffness",
-}
+COMPLIANCE_WORDS = {cls.__name__: cls.scene_file.description for cls in COMPLIANCE_MODELS}
 #: Where a contact kind's edge strikes (`summary`).
 CONTACT_WORDS = {
     "flank": "flank on flank", "gear_tip_edge": "the gear's tip edge on the pinion flank",

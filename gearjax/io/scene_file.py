@@ -15,7 +15,7 @@ from ..accuracy import Accuracy
 from ..geometry import FAMILIES
 from ..geometry.errors import MeshErrors
 from ..geometry.modification import FlankModification
-from ..ltca import IsoCompliance, SliceCompliance
+from ..ltca import COMPLIANCE_MODELS
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from ..units import Material
 
@@ -76,7 +76,7 @@ _ERROR_KEYS = {
 }
 _OPERATING_KEYS = {"torque_Nm", "speed_rpm"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio", "density"}
-_LTCA_KEYS = {"compliance", "coupling_length_mn", "hertz", "hub_radius", "extended_contact"}
+_LTCA_KEYS = {"compliance", "hub_radius", "extended_contact"}.union(*(cls.scene_file.keys for cls in COMPLIANCE_MODELS))
 _ANALYSIS_KEYS = {"accuracy", "effects", "tca_method", "positions_per_pitch", "face_slices", "dtype", "pitches"}
 
 
@@ -170,7 +170,7 @@ def _pair_from(p: dict):
         if key == "family":
             continue
         keyword, kind, _, factor = spec.keys[key]
-        kwargs[keyword] = _read_pair_value(key, kind, value, factor)
+        kwargs[keyword] = _read_value("pair", key, kind, value, factor)
     return _build("pair", cls, **kwargs)
 
 
@@ -225,18 +225,18 @@ def _pair_keys() -> set:
     return {"family"}.union(*(cls.scene_file.keys for cls in FAMILIES))
 
 
-def _read_pair_value(key: str, kind: str, value: Any, factor: float):
-    """One [pair] value of a `SceneFileSpec` kind, in engine units."""
+def _read_value(section: str, key: str, kind: str, value: Any, factor: float):
+    """One value of a `SceneFileSpec` kind, in engine units."""
     if kind == "teeth":
         if not isinstance(value, list) or len(value) != 2 or not all(
                 isinstance(t, int) and not isinstance(t, bool) for t in value):
-            raise _fail(f"pair.{key}", f"must be a list of two integers; got {value!r}")
+            raise _fail(f"{section}.{key}", f"must be a list of two integers; got {value!r}")
         return tuple(value)
     if kind == "text":
         return value
     if kind == "number_or_pair" and isinstance(value, list):
-        return tuple(v * factor for v in _numbers("pair", key, value, 2))
-    return _number("pair", key, value) * factor
+        return tuple(v * factor for v in _numbers(section, key, value, 2))
+    return _number(section, key, value) * factor
 
 
 def _check_family_keys(p: dict, spec) -> None:
@@ -299,21 +299,21 @@ def _material_from(data: dict):
 def _ltca_from(ltca: dict):
     """[ltca]: (compliance model, hub radius or None, extended_contact)."""
     _unknown("ltca", ltca, _LTCA_KEYS)
-    compliance_kind = ltca.get("compliance", "slice")
-    if compliance_kind not in ("slice", "iso"):
-        raise _fail("ltca.compliance", f"must be 'slice' or 'iso'; got {compliance_kind!r}")
-    if compliance_kind == "iso":
-        for key in ("coupling_length_mn", "hertz"):
-            if key in ltca:
-                raise _fail(f"ltca.{key}", "applies to compliance = 'slice' only")
-        compliance = IsoCompliance()
-    else:
-        options = {}
-        if "coupling_length_mn" in ltca:
-            options["coupling_length"] = _number("ltca", "coupling_length_mn", ltca["coupling_length_mn"])
-        if "hertz" in ltca:
-            options["hertz"] = ltca["hertz"]
-        compliance = _build("ltca", SliceCompliance, **options)
+    by_name = {cls.scene_file.family: cls for cls in COMPLIANCE_MODELS}
+    kind = ltca.get("compliance", COMPLIANCE_MODELS[0].scene_file.family)
+    if kind not in by_name:
+        raise _fail("ltca.compliance", f"must be {' or '.join(repr(name) for name in by_name)}; got {kind!r}")
+    spec = by_name[kind].scene_file
+    options = {}
+    for key, value in ltca.items():
+        owners = [name for name, cls in by_name.items() if key in cls.scene_file.keys]
+        if not owners:
+            continue  # one of [ltca]'s own keys
+        if key not in spec.keys:
+            raise _fail(f"ltca.{key}", f"applies to compliance = {' or '.join(repr(o) for o in owners)} only")
+        keyword, value_kind, _, factor = spec.keys[key]
+        options[keyword] = _read_value("ltca", key, value_kind, value, factor)
+    compliance = _build("ltca", by_name[kind], **options)
     hub_radius = None
     if "hub_radius" in ltca:
         value = ltca["hub_radius"]

@@ -10,3 +10,7 @@ from .compliance import (
 from .model import ContactModel as ContactModel
 from .iso import IsoStiffness as IsoStiffness, iso_mesh_stiffness as iso_mesh_stiffness
 from .solver import ContactProblem as ContactProblem, ContactSolution as ContactSolution, solve_contact as solve_contact
+
+#: The compliance models a scene file can name (`AbstractCompliance.scene_file`), the
+#: default first: a new model is added here, in its own module and in its tests.
+COMPLIANCE_MODELS = (SliceCompliance, IsoCompliance)

@@ -41,6 +41,7 @@ import jax.numpy as jnp
 
 from .._custom_types import Array, Float
 from .._validate import check_choice, check_range
+from ..geometry._base import SceneFileSpec
 from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import TCAResult
 from ..units import Material
@@ -95,9 +96,12 @@ class AbstractCompliance(eqx.Module):
     Attributes:
         families: the pair families whose teeth the model describes (class variable);
             `Scene` refuses a loaded scene of any other family.
+        scene_file: how scene files name it in `[ltca]` (a `SceneFileSpec`: the value of
+            `compliance = "..."`, its description, its option keys), or None.
     """
 
     families: AbstractClassVar[tuple[type, ...]]
+    scene_file: ClassVar[SceneFileSpec | None] = None
 
     @abc.abstractmethod
     def __call__(
@@ -123,6 +127,7 @@ class IsoCompliance(AbstractCompliance):
     scale each slice's contact-line length."""
 
     families: ClassVar[tuple[type, ...]] = (AbstractInvolutePair,)
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec("iso", "ISO 6336-1 line stiffness", {}, required=())
 
     def __call__(self, pair: AbstractInvolutePair, material: Material, hub_radius, tca: TCAResult, n_mid: int, quadrature: int, weights) -> PointCompliance:
         del hub_radius, quadrature
@@ -233,6 +238,11 @@ class SliceCompliance(AbstractCompliance):
     """
 
     families: ClassVar[tuple[type, ...]] = (AbstractInvolutePair,)
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
+        "slice", "tooth compliance per face slice: bending, shear, foundation, Hertz",
+        {"coupling_length_mn": ("coupling_length", "number", "m_n", 1.0), "hertz": ("hertz", "text", "", 1.0)},
+        required=(),
+    )
 
     coupling_length: float = eqx.field(static=True, default=1.1)
     hertz: str = eqx.field(static=True, default="palmgren")
