@@ -47,31 +47,12 @@ from pathlib import Path
 
 import jax
 
-#: Environment variable that moves the cache directory.
-ENV_VAR = "GEARJAX_CACHE_DIR"
+from .directories import default_cache_dir, make_cache_dir
+from .program_cache import PROGRAMS_SUBDIR, enable_program_cache
+
 #: Programs that compile faster than this (s) are not written: small eager operations
 #: would otherwise fill the directory with entries that save nothing.
 MIN_COMPILE_TIME_S = 0.2
-
-
-def default_cache_dir() -> Path:
-    """`$GEARJAX_CACHE_DIR`, else `$XDG_CACHE_HOME/gearjax/jax` (default `~/.cache`)."""
-    path = os.environ.get(ENV_VAR)
-    if path:
-        return Path(path).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base).expanduser() / "gearjax" / "jax"
-
-
-def make_cache_dir(directory: Path) -> Path:
-    """Create `directory` (and its parents) if missing; a `ValueError` names the directory
-    and `$GEARJAX_CACHE_DIR` when it cannot be created."""
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ValueError(f"cache directory {str(directory)!r} cannot be created ({err.strerror}); "
-                         f"set {ENV_VAR} to a writable directory") from None
-    return directory
 
 
 def enable_compilation_cache(path: str | os.PathLike | None = None, *, programs: bool = True) -> Path:
@@ -99,8 +80,6 @@ def enable_compilation_cache(path: str | os.PathLike | None = None, *, programs:
     jax.config.update("jax_compilation_cache_dir", str(directory))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_TIME_S)
     if programs:
-        from .program_cache import PROGRAMS_SUBDIR, enable_program_cache
-
         enable_program_cache(directory / PROGRAMS_SUBDIR)
     return directory
 

@@ -59,7 +59,7 @@ from typing import Any
 import jax
 
 from .program_key import Uncacheable, program_key
-from .cache import default_cache_dir, make_cache_dir
+from .directories import default_cache_dir, make_cache_dir
 
 #: Subdirectory of the cache directory that holds the program cache's entries.
 PROGRAMS_SUBDIR = "programs"
