@@ -18,7 +18,7 @@ from gearjax.geometry import (
     DoubleArcZone,
     InvoluteGearPair,
 )
-from gearjax.ltca import AbstractCompliance, IsoCompliance
+from gearjax.ltca import AbstractCompliance, IsoCompliance, SliceCompliance
 
 FAMILIES = (InvoluteGearPair, CurvilinearGearPair, DoubleArcGearPair, DoubleArcZone)
 
@@ -29,6 +29,20 @@ def test_a_family_that_forgets_a_capability_cannot_be_instantiated():
 
     with pytest.raises(TypeError, match="conjugate_slices|screen_edges|linear_lead|supported_effects"):
         Forgetful()
+
+
+@pytest.mark.parametrize("family", FAMILIES + (AbstractInvolutePair, AbstractFlankPair, IsoCompliance, SliceCompliance))
+def test_no_concrete_method_is_overridden(family):
+    """Abstract or final (equinox's rule): a method that a base class implements is not
+    implemented again below it; a family without a closed form calls the generic function
+    (`geometry._base.generic_*`) from its own method instead."""
+    for name, value in vars(family).items():
+        if not callable(value) or name.startswith("__"):
+            continue
+        for base in family.__mro__[1:]:
+            inherited = vars(base).get(name)
+            if inherited is not None and callable(inherited):
+                assert getattr(inherited, "__isabstractmethod__", False), f"{family.__name__}.{name} overrides {base.__name__}.{name}"
 
 
 @pytest.mark.parametrize("family", FAMILIES)

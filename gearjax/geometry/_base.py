@@ -164,18 +164,11 @@ class AbstractGearPair(eqx.Module):
         (`_mm`, `_deg`, `_um`; none for ratios), values are arrays (per gear: shape 2)."""
 
     # ------------------------------------------------------------------ derived geometry
+    @abc.abstractmethod
     def resolve(self):
         """This pair with every `derived` quantity evaluated once (see the module
-        docstring); a resolved pair is returned as it is."""
-        if self.derived is not None:
-            return self
-        resolved = eqx.tree_at(lambda p: p.derived, self, {}, is_leaf=lambda x: x is None)
-        for name in _derived_names(type(self)):
-            # Each quantity is evaluated on the partly resolved pair, so it reuses the
-            # ones before it (the working pressure angle is solved once).
-            value = getattr(resolved, name)
-            resolved = eqx.tree_at(lambda p: p.derived, resolved, {**resolved.derived, name: value})
-        return resolved
+        docstring); a resolved pair is returned as it is. Families with derived quantities
+        of their own return `resolve_derived(self)`."""
 
     @property
     def gear_ratio(self) -> float:
@@ -260,33 +253,25 @@ class AbstractFlankPair(AbstractGearPair):
         """Drive-flank profile of tooth 0 in the gear's local frame (mm, relative to its axis)."""
         return rotate2(self.placement(gear), self.profile(gear, u))
 
+    @abc.abstractmethod
     def profile_tangent(self, gear: int, u: ArrayLike) -> tuple[Float[Array, "2"], Float[Array, "2"]]:
-        """Point and derivative $\\mathrm{d}P/\\mathrm{d}u$ of the local profile."""
-        u = as_float(u)
-        return jax.jvp(lambda t: self.local_profile(gear, t), (u,), (jnp.ones_like(u),))
+        """Point and derivative $\\mathrm{d}P/\\mathrm{d}u$ of the local profile (closed form,
+        or `generic_profile_tangent`)."""
 
+    @abc.abstractmethod
     def profile_normal(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
-        """Outward unit normal of the local profile."""
-        _, tangent = self.profile_tangent(gear, u)
-        return safe_divide(perp2(tangent), safe_norm(tangent)[..., None])
+        """Outward unit normal of the local profile (closed form, or `generic_profile_normal`)."""
 
     def lead_rate(self, gear: int, z: ArrayLike) -> Scalar:
         """$\\mathrm{d}\\psi/\\mathrm{d}z$ (rad/mm)."""
         z = as_float(z)
         return jax.jvp(lambda t: self.lead_rotation(gear, t), (z,), (jnp.ones_like(z),))[1]
 
+    @abc.abstractmethod
     def transverse_normal_fraction(self, gear: int, u: ArrayLike, z: ArrayLike) -> Scalar:
-        r"""Length of the transverse part of the flank's 3-D unit normal.
-
-        For $r(u, z) = (R(\psi(z)) P(u), z)$ the normal is $\propto (P_u^\perp, \pm(\hat t
-        \cdot P)\psi')$, hence $|n_t| = 1/\sqrt{1 + ((\hat t\cdot P)\,\psi')^2}$
-        ($\cos\beta_b$ for an involute helicoid). A normal offset $\delta$ of the flank is a
-        transverse offset $\delta/|n_t|$ to first order in $\delta$.
-        """
-        point, tangent = self.profile_tangent(gear, u)
-        unit_tangent = safe_divide(tangent, safe_norm(tangent)[..., None])
-        lever = jnp.sum(unit_tangent * point, axis=-1) * self.lead_rate(gear, z)
-        return 1.0 / jnp.sqrt(1.0 + lever**2)
+        """Length $|n_t|$ of the transverse part of the flank's 3-D unit normal (closed form,
+        or `generic_transverse_normal_fraction`): a normal offset $\\delta$ of the flank is a
+        transverse offset $\\delta/|n_t|$ to first order in $\\delta$."""
 
     def flank_point(
         self,
@@ -309,6 +294,7 @@ class AbstractFlankPair(AbstractGearPair):
         planar = self.slice_point(gear, u, z, rotation + self.lead_rotation(gear, z), depth)
         return jnp.concatenate([planar, jnp.reshape(as_float(z), (1,))])
 
+    @abc.abstractmethod
     def slice_point(
         self,
         gear: int,
@@ -318,14 +304,10 @@ class AbstractFlankPair(AbstractGearPair):
         depth: ArrayLike = 0.0,
     ) -> Float[Array, "2"]:
         """Planar point of the transverse section at `z`, turned by `slice_rotation` (rad,
-        lead included), with `depth` (mm, normal) of material removed."""
-        local = self.local_profile(gear, u)
-        normal = self.profile_normal(gear, u)
-        offset = depth / self.transverse_normal_fraction(gear, u, z)
-        local = local - offset * normal
-        sense = 1.0 if gear == 0 else -1.0
-        return self.center(gear) + rotate2(sense * slice_rotation, local)
+        lead included), with `depth` (mm, normal) of material removed (closed form, or
+        `generic_slice_point`)."""
 
+    @abc.abstractmethod
     def slice_point_tangent(
         self,
         gear: int,
@@ -335,14 +317,9 @@ class AbstractFlankPair(AbstractGearPair):
         depth: Callable[[Array], Array] | None = None,
     ) -> tuple[Float[Array, "2"], Float[Array, "2"]]:
         """`slice_point` and its derivative $\\mathrm{d}X/\\mathrm{d}u$ (mm/mm), the material
-        depth a function `depth(u)` (mm) of the profile parameter (None: unmodified).
-
-        Here by forward-mode differentiation of `slice_point`; a family with closed forms
-        overrides it (the TCA's Newton residuals hold these tangents, so every operation here
-        is differentiated twice more in a solve)."""
-        u = as_float(u)
-        depth = (lambda t: jnp.zeros_like(t)) if depth is None else depth
-        return jax.jvp(lambda t: self.slice_point(gear, t, z, slice_rotation, depth(t)), (u,), (jnp.ones_like(u),))
+        depth a function `depth(u)` (mm) of the profile parameter (None: unmodified); closed
+        form, or `generic_slice_point_tangent` (the TCA's Newton residuals hold these
+        tangents, so every operation here is differentiated twice more in a solve)."""
 
     def tip_edge(self, gear: int, z: ArrayLike, rotation: ArrayLike = 0.0) -> Float[Array, "3"]:
         """Tip edge of the drive flank (the curve $u = u_\\text{tip}$) at axial `z` (mm)."""
@@ -353,3 +330,67 @@ class AbstractFlankPair(AbstractGearPair):
     ) -> Float[Array, "3"]:
         """Face-end edge of the drive flank, `side` = -1 (z = -b/2) or +1 (z = +b/2)."""
         return self.flank_point(gear, u, 0.5 * side * self.face_width, rotation)
+
+
+# ---------------------------------------------------------------------------------------
+# Generic implementations of the flank methods, by differentiation of the family's profile
+# and lead: a family without closed forms returns these from its methods.
+def resolve_derived(pair):
+    """`pair` with every `derived` quantity evaluated once (see the module docstring); a
+    resolved pair is returned as it is."""
+    if pair.derived is not None:
+        return pair
+    resolved = eqx.tree_at(lambda p: p.derived, pair, {}, is_leaf=lambda x: x is None)
+    for name in _derived_names(type(pair)):
+        # Each quantity is evaluated on the partly resolved pair, so it reuses the
+        # ones before it (the working pressure angle is solved once).
+        value = getattr(resolved, name)
+        resolved = eqx.tree_at(lambda p: p.derived, resolved, {**resolved.derived, name: value})
+    return resolved
+
+
+def generic_profile_tangent(pair: AbstractFlankPair, gear: int, u: ArrayLike):
+    """Point and derivative $\\mathrm{d}P/\\mathrm{d}u$ of the local profile, by forward-mode
+    differentiation of `local_profile`."""
+    u = as_float(u)
+    return jax.jvp(lambda t: pair.local_profile(gear, t), (u,), (jnp.ones_like(u),))
+
+
+def generic_profile_normal(pair: AbstractFlankPair, gear: int, u: ArrayLike) -> Float[Array, "2"]:
+    """Outward unit normal of the local profile, from `profile_tangent`."""
+    _, tangent = pair.profile_tangent(gear, u)
+    return safe_divide(perp2(tangent), safe_norm(tangent)[..., None])
+
+
+def generic_transverse_normal_fraction(pair: AbstractFlankPair, gear: int, u: ArrayLike, z: ArrayLike) -> Scalar:
+    r"""Length of the transverse part of the flank's 3-D unit normal.
+
+    For $r(u, z) = (R(\psi(z)) P(u), z)$ the normal is $\propto (P_u^\perp, \pm(\hat t
+    \cdot P)\psi')$, hence $|n_t| = 1/\sqrt{1 + ((\hat t\cdot P)\,\psi')^2}$
+    ($\cos\beta_b$ for an involute helicoid).
+    """
+    point, tangent = pair.profile_tangent(gear, u)
+    unit_tangent = safe_divide(tangent, safe_norm(tangent)[..., None])
+    lever = jnp.sum(unit_tangent * point, axis=-1) * pair.lead_rate(gear, z)
+    return 1.0 / jnp.sqrt(1.0 + lever**2)
+
+
+def generic_slice_point(pair: AbstractFlankPair, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
+                        depth: ArrayLike = 0.0) -> Float[Array, "2"]:
+    """`AbstractFlankPair.slice_point` from the local profile, its normal and
+    `transverse_normal_fraction`."""
+    local = pair.local_profile(gear, u)
+    normal = pair.profile_normal(gear, u)
+    offset = depth / pair.transverse_normal_fraction(gear, u, z)
+    local = local - offset * normal
+    sense = 1.0 if gear == 0 else -1.0
+    return pair.center(gear) + rotate2(sense * slice_rotation, local)
+
+
+def generic_slice_point_tangent(pair: AbstractFlankPair, gear: int, u: ArrayLike, z: ArrayLike,
+                                slice_rotation: ArrayLike, depth: Callable[[Array], Array] | None = None):
+    """`AbstractFlankPair.slice_point_tangent` by forward-mode differentiation of
+    `slice_point`."""
+    u = as_float(u)
+    depth = (lambda t: jnp.zeros_like(t)) if depth is None else depth
+    return jax.jvp(lambda t: pair.slice_point(gear, t, z, slice_rotation, depth(t)), (u,), (jnp.ones_like(u),))

@@ -112,7 +112,7 @@ class CurvilinearGearPair(AbstractInvolutePair):
 
     def geometry_report(self) -> dict[str, ArrayLike]:
         return {
-            **super().geometry_report(),
+            **self._section_report(),
             "tooth_trace_radius_mm": self.tooth_trace_radius,
             "contact_line_length_mm": self.contact_line_length,
         }

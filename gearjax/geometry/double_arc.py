@@ -42,7 +42,18 @@ import numpy as np
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from ._base import AbstractFlankPair, AbstractGearPair, SceneFileSpec, derived
+from ._base import (
+    AbstractFlankPair,
+    AbstractGearPair,
+    SceneFileSpec,
+    derived,
+    generic_profile_normal,
+    generic_profile_tangent,
+    generic_slice_point,
+    generic_slice_point_tangent,
+    generic_transverse_normal_fraction,
+    resolve_derived,
+)
 from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, generated_point
 
 ZONE_NAMES = ("convex driving tooth", "concave driving tooth")
@@ -160,6 +171,9 @@ class DoubleArcGearPair(AbstractGearPair):
     def contact_zones(self) -> tuple[DoubleArcZone, DoubleArcZone]:
         """The two contact zones (convex driving, concave driving tooth)."""
         return (DoubleArcZone(self, CONVEX), DoubleArcZone(self, CONCAVE))
+
+    def resolve(self) -> DoubleArcGearPair:
+        return resolve_derived(self)
 
     def geometry_report(self) -> dict[str, ArrayLike]:
         return {
@@ -308,6 +322,24 @@ class DoubleArcZone(AbstractFlankPair):
 
     def resolve(self) -> DoubleArcZone:
         return DoubleArcZone(self.gears.resolve(), self.zone)
+
+    # The arcs have no closed-form flank in 3-D: the generic forms differentiate the
+    # profile and lead.
+    def profile_tangent(self, gear: int, u: ArrayLike):
+        return generic_profile_tangent(self, gear, u)
+
+    def profile_normal(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
+        return generic_profile_normal(self, gear, u)
+
+    def transverse_normal_fraction(self, gear: int, u: ArrayLike, z: ArrayLike) -> Scalar:
+        return generic_transverse_normal_fraction(self, gear, u, z)
+
+    def slice_point(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
+                    depth: ArrayLike = 0.0) -> Float[Array, "2"]:
+        return generic_slice_point(self, gear, u, z, slice_rotation, depth)
+
+    def slice_point_tangent(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike, depth=None):
+        return generic_slice_point_tangent(self, gear, u, z, slice_rotation, depth)
 
     @property
     def center_distance(self) -> Scalar:

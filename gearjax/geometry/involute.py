@@ -69,6 +69,9 @@ class InvoluteGearPair(AbstractInvolutePair):
         self.hand = 1 if hand == "right" else -1
         self._check_section(center_distance)
 
+    def geometry_report(self) -> dict[str, ArrayLike]:
+        return self._section_report()
+
     def transverse_normal_fraction(self, gear: int, u: ArrayLike, z: ArrayLike) -> Scalar:
         """$|n_t| = \\cos\\beta_b$ everywhere on an involute helicoid."""
         shape = jnp.broadcast_shapes(jnp.shape(u), jnp.shape(z))

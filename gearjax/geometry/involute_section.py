@@ -38,7 +38,7 @@ from .._numerics import (
     safe_sqrt,
 )
 from .._validate import check_int, check_range, is_concrete
-from ._base import AbstractFlankPair, derived
+from ._base import AbstractFlankPair, derived, resolve_derived
 from .involute_checks import check_feasible
 from .involute_curve import half_tooth_angle, involute_point
 
@@ -419,7 +419,11 @@ class AbstractInvolutePair(AbstractFlankPair):
         return jnp.stack([x, y, jnp.broadcast_to(as_float(z), jnp.shape(x))], -1)
 
 
-    def geometry_report(self) -> dict[str, ArrayLike]:
+    def resolve(self):
+        return resolve_derived(self)
+
+    def _section_report(self) -> dict[str, ArrayLike]:
+        """The involute section's quantities for `geometry_report`."""
         deg = 180.0 / math.pi
         return {
             "normal_module_mm": self.normal_module,
