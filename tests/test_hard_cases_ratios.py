@@ -67,7 +67,7 @@ def random_failures(groups):
 
 # No known failures. Design 143 on 17/170 (m_n 1.0 mm) is the hardest: 4 flank solves whose contact lies 1 µm inside the end of the pinion's root relief, where
 # the flank's curvature jumps; the damped fallback needs 40-71 steps there, so it has at
-# least 128 at any preset (`tools/diagnostics/relief_kink.py`; `tca.analysis.fallback_steps`).
+# least 128 at any preset (`tca.analysis.fallback_steps`).
 RANDOM_KNOWN: dict[str, str] = {}
 
 

@@ -138,7 +138,7 @@ def test_palmgren_approach_converges_with_the_face_slices(seed_pair, loaded_seed
 def test_palmgren_newton_does_not_cycle(monkeypatch):
     """The contact problem on which the active-set Newton iteration with Palmgren's law
     cycled (seed pair, 1000 N·m, 81 slices, one position; `tests/data/palmgren_cycle.npz`,
-    written by `tools/diagnostics/ltca_cycle.py`): with the damped steps it
+    the LTCA's inputs at that point): with the damped steps it
     converges to a solution of the complementarity problem; with full Newton steps it does
     not converge in 80 steps, so the data still exercise the damping."""
     data = np.load(Path(__file__).parent / "data" / "palmgren_cycle.npz")

@@ -137,8 +137,8 @@ def _coincidence_weight(pair: AbstractFlankPair, atol):
     weights are exactly 1 (`reference`, 1e-13, is reached from $a$ = 113 mm, where the
     weight becomes 0.4 at 282 mm); in float32 the floored atol (`floored_tolerances`, 7.6e-6)
     is one ulp of a 64-128 mm coordinate, which converged solves of the seed pair missed by
-    one to six ulps (`tools/diagnostics/float32.py`), and their contacts were
-    dropped. Scaling a row changes neither the root nor its implicit derivative."""
+    one to six ulps (the float32 seed pair of `tests/test_hard_cases.py`), and their
+    contacts were dropped. Scaling a row changes neither the root nor its implicit derivative."""
     eps = float(jnp.finfo(jnp.result_type(pair.center_distance)).eps)
     floor = COINCIDENCE_ULPS * eps * jnp.abs(pair.center_distance)
     coincidence = atol / jnp.maximum(atol, floor)

@@ -142,9 +142,9 @@ def fallback_steps(newton_max_steps: int) -> int:
     `tests/test_hard_cases_ratios.py` (m_n 1 mm, a 0.14 mm root relief near the pinion's
     base circle) the flank contact lies 1 µm inside the relief's end, where the flank's
     curvature jumps by two orders of magnitude, and `SafeguardedNewton` zig-zags across
-    it for 40 to 71 steps before it converges (`tools/diagnostics/relief_kink.py`), more
-    than `FALLBACK_STEPS` times the `fast` preset's Newton cap. Only failed candidates are
-    retried, so a higher cap costs steps only where a retried solve does not converge."""
+    it for 40 to 71 steps before it converges, more than `FALLBACK_STEPS` times the `fast`
+    preset's Newton cap. Only failed candidates are retried, so a higher cap costs steps
+    only where a retried solve does not converge."""
     return max(FALLBACK_STEPS * newton_max_steps, FALLBACK_MIN_STEPS)
 
 
