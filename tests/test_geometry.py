@@ -119,23 +119,25 @@ def test_flank_surface_is_the_involute_helicoid(seed_pair):
 
 
 def test_closed_form_normals_match_autodiff(seed_pair):
-    from gearjax.geometry._base import AbstractFlankPair
+    from gearjax.geometry._base import generic_profile_normal, generic_profile_tangent, generic_transverse_normal_fraction
 
     for gear in (0, 1):
         for s in (20.0, 35.0):
             closed = np.asarray(seed_pair.profile_normal(gear, s))
-            generic = np.asarray(AbstractFlankPair.profile_normal(seed_pair, gear, s))
+            generic = np.asarray(generic_profile_normal(seed_pair, gear, s))
             np.testing.assert_allclose(closed, generic, atol=1e-14)
-            frac = AbstractFlankPair.transverse_normal_fraction(seed_pair, gear, s, 7.0)
+            for c, g in zip(seed_pair.profile_tangent(gear, s), generic_profile_tangent(seed_pair, gear, s)):
+                np.testing.assert_allclose(np.asarray(c), np.asarray(g), rtol=1e-13, atol=1e-12)
+            frac = generic_transverse_normal_fraction(seed_pair, gear, s, 7.0)
             assert float(frac) == pytest.approx(float(seed_pair.transverse_normal_fraction(gear, s, 7.0)), rel=1e-13)
 
 
 @pytest.mark.parametrize("family", ["helical", "curvilinear"])
 def test_closed_form_slice_point_and_tangent_match_autodiff(seed_pair, family):
-    # The TCA's residual uses AbstractInvolutePair's closed forms; the generic base-class
+    # The TCA's residual uses AbstractInvolutePair's closed forms; the generic
     # point (profile, normal and normal fraction composed) and its jvp are the reference.
     from gearjax import CurvilinearGearPair, FlankModification
-    from gearjax.geometry._base import AbstractFlankPair
+    from gearjax.geometry._base import generic_slice_point
 
     pair = seed_pair if family == "helical" else CurvilinearGearPair((20, 30), 2.0, 20.0, 20.0, 60.0)
     mod = FlankModification(tip_relief=0.02, root_relief=0.015, tip_relief_length=1.2 * float(pair.normal_module),
@@ -146,7 +148,7 @@ def test_closed_form_slice_point_and_tangent_match_autodiff(seed_pair, family):
         depth = lambda t: mod.depth(t, z, start, tip, pair.face_width)  # noqa: E731
         lo, hi = (float(v) for v in pair.profile_limits(gear))
         for s in np.linspace(lo - 1.0, hi + 0.5, 7):  # the reliefs' parabolas and beyond the tip
-            generic = lambda t: AbstractFlankPair.slice_point(pair, gear, t, z, 0.3, depth(t))  # noqa: E731
+            generic = lambda t: generic_slice_point(pair, gear, t, z, 0.3, depth(t))  # noqa: E731
             point, tangent = jax.jvp(generic, (jnp.asarray(s),), (jnp.asarray(1.0),))
             closed_point, closed_tangent = pair.slice_point_tangent(gear, s, z, 0.3, depth)
             np.testing.assert_allclose(closed_point, point, rtol=0, atol=1e-12)

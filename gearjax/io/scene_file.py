@@ -160,7 +160,7 @@ def _pair_from(p: dict):
     _unknown("pair", p, _pair_keys())
     family = p.get("family", "involute")
     by_name = {cls.scene_file.family: cls for cls in FAMILIES}
-    if family not in by_name:
+    if not isinstance(family, str) or family not in by_name:
         raise _fail("pair.family", f"must be one of {', '.join(repr(f) for f in by_name)}; got {family!r}")
     cls = by_name[family]
     spec = cls.scene_file
@@ -301,7 +301,7 @@ def _ltca_from(ltca: dict):
     _unknown("ltca", ltca, _LTCA_KEYS)
     by_name = {cls.scene_file.family: cls for cls in COMPLIANCE_MODELS}
     kind = ltca.get("compliance", COMPLIANCE_MODELS[0].scene_file.family)
-    if kind not in by_name:
+    if not isinstance(kind, str) or kind not in by_name:
         raise _fail("ltca.compliance", f"must be {' or '.join(repr(name) for name in by_name)}; got {kind!r}")
     spec = by_name[kind].scene_file
     options = {}
