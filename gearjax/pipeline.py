@@ -11,7 +11,8 @@ Everything that runs the chain comes through here: `simulate`, `simulate_designs
 sweeps (`over_loads`: TCA once, the loaded stages mapped over torques and speeds),
 `regime_transition` and the optimiser's objective (`unloaded`, then `loaded` and `impact`
 per load). They add only their own `vmap`/`lax.map` around these functions. Each stage
-function applies the **traced-input guard**: where an input that the constructors could not
+function applies the **traced-input guard** (`modification_checks` once per scene,
+`operating_checks` per load and speed): where an input that the constructors could not
 check (a traced modification or operating point) is out of range, the stage's outputs are
 NaN and its `result` names the failure (`invalid_modification`,
 `invalid_operating_point`), with no host callback, so programs stay cacheable. For
@@ -56,7 +57,7 @@ class SimulationResult(eqx.Module):
 
 # ----------------------------------------------------------------------------- the stages
 def unloaded(scene: Scene, pair, checks=()) -> TCAResult:
-    """The TCA stage over the scene's cycle, guarded by `checks` (`input_checks`)."""
+    """The TCA stage over the scene's cycle, guarded by `checks` (`modification_checks`, `operating_checks`)."""
     with jax.named_scope("stage_tca"):
         tca = tooth_contact_analysis(pair, scene.depth, accuracy=scene.accuracy, pairs=scene.pairs,
                                      pitches=scene.pitches)
@@ -86,7 +87,7 @@ def run(scene: Scene) -> SimulationResult:
     operating point's included."""
     pair = scene.pair.resolve()
     torque, speed = scene.operating.torque, scene.operating.speed
-    checks = input_checks(scene, pair, torque, speed)
+    checks = modification_checks(scene, pair) + operating_checks(torque, speed)
     tca = unloaded(scene, pair, checks)
     ltca = loaded(scene, pair, tca, torque, checks) if "ltca" in scene.effects else None
     hit = impact(scene, pair, tca, ltca, torque, speed, checks) if "impact" in scene.effects else None
@@ -103,15 +104,16 @@ def over_loads(scene: Scene, torques, speeds=None):
     computed once; the speed axis costs only the impact's closing formulas. The scene's own
     operating point is ignored."""
     pair = scene.pair.resolve()
-    tca = unloaded(scene, pair, input_checks(scene, pair))
+    checks = modification_checks(scene, pair)
+    tca = unloaded(scene, pair, checks)
 
     def at_torque(torque):
-        ltca = loaded(scene, pair, tca, torque, input_checks(scene, pair, torque))
+        ltca = loaded(scene, pair, tca, torque, checks + operating_checks(torque))
         if speeds is None:
             return ltca, None
 
         def at_speed(speed):
-            return impact(scene, pair, tca, ltca, torque, speed, input_checks(scene, pair, torque, speed))
+            return impact(scene, pair, tca, ltca, torque, speed, checks + operating_checks(torque, speed))
 
         return ltca, jax.vmap(at_speed)(speeds)
 
@@ -120,11 +122,11 @@ def over_loads(scene: Scene, torques, speeds=None):
 
 
 # ------------------------------------------------------------------ the traced-input guard
-def input_checks(scene: Scene, pair, torque=None, speed=None) -> tuple:
-    """`((ok, failure), ...)`: whether each input that a constructor could not check when
-    traced is in range, with the `RESULTS` code that names it otherwise: the modifications
-    (`FlankModification.in_range` on every contact zone of the resolved `pair`) and the
-    given torque and speed (finite and >= 0)."""
+def modification_checks(scene: Scene, pair) -> tuple:
+    """`((ok, invalid_modification), ...)`: whether the scene's modifications, which a
+    constructor cannot check when traced, are in range (`FlankModification.in_range` on
+    every contact zone of the resolved `pair`). Built once per scene; the stages of every
+    load add `operating_checks`."""
     checks = []
     for gear, modification in ((0, scene.modification), (1, scene.gear_modification)):
         if modification is None:
@@ -132,10 +134,13 @@ def input_checks(scene: Scene, pair, torque=None, speed=None) -> tuple:
         for zone in pair.contact_zones():
             start, tip = zone.relief_coordinates(gear)
             checks.append((modification.in_range(tip - start, zone.face_width), RESULTS.invalid_modification))
-    for value in (torque, speed):
-        if value is not None:
-            checks.append((jnp.isfinite(value) & (value >= 0), RESULTS.invalid_operating_point))
     return tuple(checks)
+
+
+def operating_checks(*values) -> tuple:
+    """`((ok, invalid_operating_point), ...)` for each given torque or speed (finite and
+    >= 0; None is skipped)."""
+    return tuple((jnp.isfinite(v) & (v >= 0), RESULTS.invalid_operating_point) for v in values if v is not None)
 
 
 def guarded(stage, checks):

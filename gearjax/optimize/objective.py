@@ -223,11 +223,12 @@ class Objective(eqx.Module):
         def per_sample(errors):
             scene = self.scene_for(design, errors=errors)
             pair = scene.pair.resolve()
-            tca = pipeline.unloaded(scene, pair, pipeline.input_checks(scene, pair))
+            modified = pipeline.modification_checks(scene, pair)
+            tca = pipeline.unloaded(scene, pair, modified)
 
             def per_load(torque):
                 speed = scene.operating.speed
-                checks = pipeline.input_checks(scene, pair, torque, speed)
+                checks = modified + pipeline.operating_checks(torque, speed)
                 ltca = pipeline.loaded(scene, pair, tca, torque, checks)
                 impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
                 ok = (impact.result == RESULTS.successful) & (ltca.result == RESULTS.successful)

@@ -117,7 +117,8 @@ def _transition(arrays, static, low, high, tolerance):
     def one(design_arrays):
         scene = eqx.combine(design_arrays, static)
         pair = scene.pair.resolve()
-        tca = pipeline.unloaded(scene, pair, pipeline.input_checks(scene, pair))
+        modified = pipeline.modification_checks(scene, pair)
+        tca = pipeline.unloaded(scene, pair, modified)
 
         def running(c):
             step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
@@ -129,7 +130,7 @@ def _transition(arrays, static, low, high, tolerance):
             step, lo, hi, edge_lo, edge_hi, ltca_code, impact_code = c
             torque = jnp.where(step == 0, low, jnp.where(step == 1, high, 0.5 * (lo + hi)))
             speed = scene.operating.speed
-            checks = pipeline.input_checks(scene, pair, torque, speed)
+            checks = modified + pipeline.operating_checks(torque, speed)
             ltca = pipeline.loaded(scene, pair, tca, torque, checks)
             impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
             edge = impact.regime == ImpactRegime.edge
