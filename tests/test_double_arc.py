@@ -94,7 +94,8 @@ import optimistix as optx
 from gearjax.geometry.depth import FlankDepth
 from gearjax.geometry.double_arc import DoubleArcGearPair
 from gearjax.papers.four_state import SEED_VELOCITIES, four_state_impact
-from gearjax.tca._slice import make_problem, solve_slice
+from gearjax.tca._slice import solve_slice
+from gearjax.tca._slice_problem import make_problem
 
 SEED_PAIR = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
 

@@ -47,7 +47,7 @@ from _cases import (
 )
 
 import gearjax as gj
-from gearjax.tca._slice import COINCIDENCE_ULPS
+from gearjax.tca._slice_problem import COINCIDENCE_ULPS
 
 PAPER = PAPER_UM / 1000.0  # seed 001's optimum (mm)
 WINDOW = (-2, -1, 0, 1, 2)  # tooth pairs of every case and random design (`pair_window` within it)
@@ -193,7 +193,7 @@ def test_float32_seed_pair_matches_float64(groups):
     i, double, _ = _entry(groups, "zero_pitch_error")
     lte32, lte64 = float(jnp.mean(single.ltca.transmission_error)), float(jnp.mean(double.ltca.transmission_error[i]))
     # float32 resolves a slice's offset to about the TCA's coincidence floor (a few ulps of
-    # the centre distance, `tca._slice.COINCIDENCE_ULPS`) over the gear's base radius:
+    # the centre distance, `tca._slice_problem.COINCIDENCE_ULPS`) over the gear's base radius:
     # 7.3e-7 rad here, 0.6 % of the LTE mean (measured: 2e-7 rad, 0.2 %).
     pair = helical()
     resolution = COINCIDENCE_ULPS * float(jnp.finfo(jnp.float32).eps) * float(pair.center_distance) / float(pair.base_radius[1])

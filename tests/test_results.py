@@ -16,7 +16,7 @@ from gearjax.ltca import IsoCompliance
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.pipeline import check_results as _check_results, program_text
 from gearjax.tca import ContactKind
-from gearjax.tca._slice import CANDIDATES, contact_kind
+from gearjax.tca._slice_problem import CANDIDATES, contact_kind
 
 TINY = gj.Accuracy(positions_per_pitch=4, face_slices=3)
 # A host callback is a custom call whose target names a (Python) callback; the debug

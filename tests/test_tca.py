@@ -287,7 +287,7 @@ def test_flank_contact_inside_a_steep_tip_relief_is_not_missed():
     edge instead.)"""
     import optimistix as optx
 
-    from gearjax.tca._slice import make_problem
+    from gearjax.tca._slice_problem import make_problem
 
     pair = InvoluteGearPair((29, 71), 2.2647, 19.2261, 0.0, 19.1957, (-0.2895, 0.1502),
                             addendum_coefficient=1.0743, dedendum_coefficient=1.3243).resolve()
@@ -337,7 +337,8 @@ def test_edge_reachable_agrees_with_a_fine_scan_of_the_flanks(seed_pair):
     converged on the active flanks the corner was judged able to reach them."""
     import optimistix as optx
 
-    from gearjax.tca._slice import edge_reachable, make_problem, solve_candidates
+    from gearjax.tca._slice import edge_reachable, solve_candidates
+    from gearjax.tca._slice_problem import make_problem
 
     pair = seed_pair.resolve()
     depth = FlankDepth(pinion=paper_optimum())

@@ -30,7 +30,7 @@ from .._solution import RESULTS, enum_name, enum_where, first_failure
 from ..ltca.analysis import LTCAResult, _levers, moment_arms
 from ..ltca.model import ContactModel
 from ..tca import ContactKind, TCAResult
-from ..tca._slice import contact_kind
+from ..tca._slice_problem import contact_kind
 from .energy import base_radius_equivalent_mass, equivalent_mass, gear_inertia, impact_force
 from .search import SearchContext, _Search, bracket, first_contact
 from .stiffness import LocalStiffness, local_stiffness

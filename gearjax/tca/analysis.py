@@ -1,7 +1,7 @@
 r"""Unloaded tooth contact analysis over a mesh cycle.
 
 For pinion angles $\varphi_1$ over one angular pitch, every tooth pair $k$ of the window and
-every transverse slice $z_j$, the slice problem (`_slice.py`) gives the gear offset at which
+every transverse slice $z_j$, the slice problem (`_slice_problem.py`, solved in `_slice.py`) gives the gear offset at which
 that slice touches. The gear is pushed by the pinion, so it sits at the largest offset of
 all slices of all pairs: that is the transmission error
 
@@ -40,16 +40,8 @@ from .._numerics import as_float, rotate2
 from ..accuracy import Accuracy
 from ..geometry._base import AbstractGearPair
 from ..geometry.depth import FlankDepth
-from ._slice import (
-    FLANK,
-    SliceContact,
-    _contact_residual,
-    contact_kind,
-    make_problem,
-    select_contact,
-    solve_again,
-    solve_candidates,
-)
+from ._slice import select_contact, solve_again, solve_candidates
+from ._slice_problem import FLANK, SliceContact, _contact_residual, contact_kind, make_problem
 from .grid import face_slices, pair_window, positions
 from .peak import explicit_peak_correction, peak_correction
 from .result import TCAResult, _tca_result, merge_zones

@@ -48,7 +48,8 @@ import optimistix as optx
 from .._custom_types import Array, Scalar
 from ._newton import SafeguardedNewton
 from .._numerics import as_float
-from ._slice import SliceContact, make_problem, select_contact, solve_candidates
+from ._slice import select_contact, solve_candidates
+from ._slice_problem import SliceContact, make_problem
 from .analysis import _lead_correction, _plane_of_action_slice, _retry_failed, contact_point, fallback_steps
 
 #: points per refinement round, the stretch's ends included

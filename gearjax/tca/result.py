@@ -8,7 +8,7 @@ import jax.numpy as jnp
 
 from .._custom_types import Array, Bool, Float, Int
 from .._solution import RESULTS, enum_name, first_failure
-from ._slice import ContactKind
+from ._slice_problem import ContactKind
 
 
 class TCAResult(eqx.Module):
