@@ -16,7 +16,8 @@ from .._custom_types import ArrayLike, Scalar
 from .._numerics import as_float
 from .._validate import check_choice
 from ._base import SceneFileSpec
-from .involute_section import SECTION_SCENE_KEYS, AbstractInvolutePair
+from .involute_checks import SECTION_SCENE_KEYS
+from .involute_section import AbstractInvolutePair
 
 
 class InvoluteGearPair(AbstractInvolutePair):

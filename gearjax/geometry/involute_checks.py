@@ -1,18 +1,74 @@
-"""Physical feasibility checks of involute pairs (concrete values only): undercut, pointed
-tips, centre distance consistency, tip clearance, interference and contact ratio. Each
-failure is a `ValueError` naming the parameter to change and its allowed range."""
+"""The involute section's inputs: its scene-file keys, the range of each parameter, and the
+physical feasibility of a pair (concrete values only): undercut, pointed tips, centre
+distance consistency, tip clearance, interference and contact ratio. Each failure is a
+`ValueError` naming the parameter to change and its allowed range."""
 
 from __future__ import annotations
 
 import math
 
+import jax.numpy as jnp
 import numpy as np
+
+from .._custom_types import Array, ArrayLike, Float
+from .._numerics import as_float
+from .._validate import check_int, check_range
+
+#: Scene-file keys of the involute section (`SceneFileSpec.keys`) that the involute
+#: families share: (constructor keyword, kind, unit in the file, factor to engine units).
+SECTION_SCENE_KEYS = {
+    "teeth": ("teeth", "teeth", "", 1.0),
+    "normal_module": ("normal_module", "number", "mm", 1.0),
+    "pressure_angle_deg": ("pressure_angle_deg", "number", "deg", 1.0),
+    "face_width": ("face_width", "number", "mm", 1.0),
+    "center_distance": ("center_distance", "number", "mm", 1.0),
+    "profile_shift": ("profile_shift", "number_or_pair", "", 1.0),
+    "addendum_coefficient": ("addendum_coefficient", "number_or_pair", "", 1.0),
+    "dedendum_coefficient": ("dedendum_coefficient", "number_or_pair", "", 1.0),
+    "root_radius_coefficient": ("root_radius_coefficient", "number_or_pair", "", 1.0),
+}
+
+
+
+def check_section_inputs(
+    teeth,
+    normal_module,
+    pressure_angle_deg,
+    helix_angle_deg,
+    face_width,
+    profile_shift,
+    addendum_coefficient,
+    dedendum_coefficient,
+    root_radius_coefficient,
+) -> tuple[int, int]:
+    """Range checks of the section's parameters (units as in the families' constructors);
+    returns the validated $(z_1, z_2)$."""
+    if not isinstance(teeth, (tuple, list)) or len(teeth) != 2:
+        raise ValueError(f"teeth must be a pair (z1, z2) of integers >= 5; got {teeth!r}")
+    z1 = check_int("teeth[0] (pinion)", teeth[0], 5, 2000)
+    z2 = check_int("teeth[1] (gear)", teeth[1], 5, 2000)
+    check_range("normal_module", normal_module, 0.01, 100.0, unit="mm")
+    check_range("pressure_angle_deg", pressure_angle_deg, 10.0, 35.0, unit="deg")
+    check_range("helix_angle_deg", helix_angle_deg, 0.0, 45.0, high_inclusive=False, unit="deg")
+    check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
+    check_range("profile_shift", profile_shift, -1.0, 1.5)
+    check_range("addendum_coefficient", addendum_coefficient, 0.3, 1.6)
+    check_range("dedendum_coefficient", dedendum_coefficient, 0.5, 2.0)
+    check_range("root_radius_coefficient", root_radius_coefficient, 0.0, 0.6)
+    return z1, z2
+
+
+def per_gear(value: ArrayLike) -> Float[Array, "2"]:
+    """`value` as a per-gear pair (..., 2): a scalar (or a batch of them) is used for both."""
+    arr = as_float(value)
+    if arr.ndim == 0 or arr.shape[-1] != 2:
+        arr = jnp.stack([arr, arr], axis=-1)
+    return arr
 
 
 def check_feasible(pair, center_distance) -> None:
     """Physical feasibility of the pair (concrete values only): undercut, pointed tips,
     interference, tip clearance, contact ratio and centre distance consistency."""
-    z1, z2 = pair.teeth
     s_form = np.asarray(pair.form_roll_length)
     for i, name in enumerate(("pinion", "gear")):
         if np.any(s_form[..., i] < 0):
@@ -29,31 +85,7 @@ def check_feasible(pair, center_distance) -> None:
                 f"(tip thickness {np.min(tip[..., i]):.4f} mm); tip thickness must be > 0 mm"
             )
     if center_distance is not None:
-        a = np.asarray(pair.center_distance)
-        given = np.asarray(center_distance, dtype=float)
-        if np.any(np.abs(given - a) > 1e-6 * np.maximum(1.0, a)):
-            alpha_t = np.asarray(pair.transverse_pressure_angle)
-            a0 = np.asarray(pair.reference_center_distance)
-            ratio = a0 * np.cos(alpha_t) / given
-            if np.all(np.abs(ratio) < 1):
-                alpha_w = np.arccos(ratio)
-                needed = (
-                    (np.tan(alpha_w) - alpha_w - (np.tan(alpha_t) - alpha_t))
-                    * (z1 + z2)
-                    / (2 * np.tan(np.asarray(pair.normal_pressure_angle)))
-                )
-                hint = f"; center_distance={_fmt(given)} mm would need x1 + x2 = {_fmt(needed)}"
-            else:
-                hint = (
-                    f"; center_distance={_fmt(given)} mm is not reachable by any profile shift "
-                    f"(it is at most a0*cos(alpha_t) = {_fmt(a0 * np.cos(alpha_t))} mm)"
-                )
-            shifts = np.asarray(pair.profile_shift)
-            raise ValueError(
-                f"center_distance={_fmt(given)} mm is inconsistent with profile_shift "
-                f"x1 + x2 = {_fmt(shifts[..., 0] + shifts[..., 1])}, which gives a = {_fmt(a)} mm "
-                f"(zero backlash){hint}; omit center_distance to derive it"
-            )
+        _check_center_distance(pair, center_distance)
     a = np.asarray(pair.center_distance)
     clearance = a[..., None] - np.asarray(pair.tip_radius) - np.asarray(pair.root_radius)[..., ::-1]
     if np.any(clearance < 0.0):
@@ -77,6 +109,37 @@ def check_feasible(pair, center_distance) -> None:
             "the pair's total contact ratio eps_alpha + eps_beta = "
             f"{np.min(eps):.4f} must be >= 1 (eps_alpha = {np.min(eps_a):.4f}); increase "
             "face_width, helix_angle_deg or addendum_coefficient"
+        )
+
+
+def _check_center_distance(pair, center_distance) -> None:
+    """A given centre distance must be the zero-backlash one of the profile shifts; the
+    error says which $x_1 + x_2$ the given value would need, if any."""
+    z1, z2 = pair.teeth
+    a = np.asarray(pair.center_distance)
+    given = np.asarray(center_distance, dtype=float)
+    if np.any(np.abs(given - a) > 1e-6 * np.maximum(1.0, a)):
+        alpha_t = np.asarray(pair.transverse_pressure_angle)
+        a0 = np.asarray(pair.reference_center_distance)
+        ratio = a0 * np.cos(alpha_t) / given
+        if np.all(np.abs(ratio) < 1):
+            alpha_w = np.arccos(ratio)
+            needed = (
+                (np.tan(alpha_w) - alpha_w - (np.tan(alpha_t) - alpha_t))
+                * (z1 + z2)
+                / (2 * np.tan(np.asarray(pair.normal_pressure_angle)))
+            )
+            hint = f"; center_distance={_fmt(given)} mm would need x1 + x2 = {_fmt(needed)}"
+        else:
+            hint = (
+                f"; center_distance={_fmt(given)} mm is not reachable by any profile shift "
+                f"(it is at most a0*cos(alpha_t) = {_fmt(a0 * np.cos(alpha_t))} mm)"
+            )
+        shifts = np.asarray(pair.profile_shift)
+        raise ValueError(
+            f"center_distance={_fmt(given)} mm is inconsistent with profile_shift "
+            f"x1 + x2 = {_fmt(shifts[..., 0] + shifts[..., 1])}, which gives a = {_fmt(a)} mm "
+            f"(zero backlash){hint}; omit center_distance to derive it"
         )
 
 

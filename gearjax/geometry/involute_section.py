@@ -31,31 +31,11 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
-from .._numerics import (
-    as_float,
-    involute,
-    inverse_involute,
-    safe_sqrt,
-)
-from .._validate import check_int, check_range, is_concrete
+from .._numerics import as_float, involute, inverse_involute, safe_sqrt
+from .._validate import check_range, is_concrete
 from ._base import AbstractFlankPair, derived, resolve_derived
-from .involute_checks import check_feasible
-from .involute_curve import half_tooth_angle, involute_point
-
-
-#: Scene-file keys of the involute section (`SceneFileSpec.keys`) that the involute
-#: families share: (constructor keyword, kind, unit in the file, factor to engine units).
-SECTION_SCENE_KEYS = {
-    "teeth": ("teeth", "teeth", "", 1.0),
-    "normal_module": ("normal_module", "number", "mm", 1.0),
-    "pressure_angle_deg": ("pressure_angle_deg", "number", "deg", 1.0),
-    "face_width": ("face_width", "number", "mm", 1.0),
-    "center_distance": ("center_distance", "number", "mm", 1.0),
-    "profile_shift": ("profile_shift", "number_or_pair", "", 1.0),
-    "addendum_coefficient": ("addendum_coefficient", "number_or_pair", "", 1.0),
-    "dedendum_coefficient": ("dedendum_coefficient", "number_or_pair", "", 1.0),
-    "root_radius_coefficient": ("root_radius_coefficient", "number_or_pair", "", 1.0),
-}
+from .involute_checks import check_feasible, check_section_inputs, per_gear
+from .involute_curve import half_tooth_angle, involute_point, involute_tangent, slice_frame
 
 
 class AbstractInvolutePair(AbstractFlankPair):
@@ -106,30 +86,20 @@ class AbstractInvolutePair(AbstractFlankPair):
         dedendum_coefficient,
         root_radius_coefficient,
     ) -> None:
-        """Validate and set the section's parameters (called by the families' `__init__`)."""
-        if not isinstance(teeth, (tuple, list)) or len(teeth) != 2:
-            raise ValueError(f"teeth must be a pair (z1, z2) of integers >= 5; got {teeth!r}")
-        z1 = check_int("teeth[0] (pinion)", teeth[0], 5, 2000)
-        z2 = check_int("teeth[1] (gear)", teeth[1], 5, 2000)
-        check_range("normal_module", normal_module, 0.01, 100.0, unit="mm")
-        check_range("pressure_angle_deg", pressure_angle_deg, 10.0, 35.0, unit="deg")
-        check_range(
-            "helix_angle_deg", helix_angle_deg, 0.0, 45.0, high_inclusive=False, unit="deg"
+        """Validate (`check_section_inputs`) and set the section's parameters (called by the
+        families' `__init__`)."""
+        self.teeth = check_section_inputs(
+            teeth, normal_module, pressure_angle_deg, helix_angle_deg, face_width, profile_shift,
+            addendum_coefficient, dedendum_coefficient, root_radius_coefficient,
         )
-        check_range("face_width", face_width, 0.0, None, low_inclusive=False, unit="mm")
-        check_range("profile_shift", profile_shift, -1.0, 1.5)
-        check_range("addendum_coefficient", addendum_coefficient, 0.3, 1.6)
-        check_range("dedendum_coefficient", dedendum_coefficient, 0.5, 2.0)
-        check_range("root_radius_coefficient", root_radius_coefficient, 0.0, 0.6)
-        self.teeth = (z1, z2)
         self.normal_module = as_float(normal_module)
         self.normal_pressure_angle = as_float(pressure_angle_deg) * (math.pi / 180.0)
         self.helix_angle = as_float(helix_angle_deg) * (math.pi / 180.0)
         self.face_width = as_float(face_width)
-        self.profile_shift = _per_gear(profile_shift)
-        self.addendum_coefficient = _per_gear(addendum_coefficient)
-        self.dedendum_coefficient = _per_gear(dedendum_coefficient)
-        self.root_radius_coefficient = _per_gear(root_radius_coefficient)
+        self.profile_shift = per_gear(profile_shift)
+        self.addendum_coefficient = per_gear(addendum_coefficient)
+        self.dedendum_coefficient = per_gear(dedendum_coefficient)
+        self.root_radius_coefficient = per_gear(root_radius_coefficient)
         self.derived = None
 
     def _check_section(self, center_distance) -> None:
@@ -324,39 +294,16 @@ class AbstractInvolutePair(AbstractFlankPair):
 
     # Closed forms of the derived geometry (the base class would use autodiff; nesting it
     # inside the Newton solves multiplies the size of the compiled program).
-    def _local_angle(self, gear: int, u: ArrayLike) -> Scalar:
-        base = self.placement(gear) + self.half_base_thickness_angle(gear)
-        return base - as_float(u) / self.base_radius[..., gear]
+    def _base_angle(self, gear: int) -> Scalar:
+        return self.placement(gear) + self.half_base_thickness_angle(gear)
 
     def profile_tangent(self, gear: int, u: ArrayLike):
-        """Point and $\\mathrm{d}P/\\mathrm{d}s = (s/r_b)(\\cos\\theta, \\sin\\theta)$."""
-        u = as_float(u)
-        theta = self._local_angle(gear, u)
-        c, s = jnp.cos(theta), jnp.sin(theta)
-        rb = self.base_radius[..., gear]
-        point = jnp.stack([rb * c - u * s, rb * s + u * c], -1)
-        return point, (u / rb)[..., None] * jnp.stack([c, s], -1)
+        """Point and $\\mathrm{d}P/\\mathrm{d}s$ (`involute_tangent`)."""
+        return involute_tangent(self.base_radius[..., gear], self._base_angle(gear), as_float(u))[:2]
 
     def profile_normal(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
         """$(-\\sin\\theta, \\cos\\theta)$, defined down to the base circle."""
-        theta = self._local_angle(gear, u)
-        return jnp.stack([-jnp.sin(theta), jnp.cos(theta)], -1)
-
-    def _slice_frame(self, gear: int, u: Array, slice_rotation: ArrayLike):
-        """$e_r(\\psi)$, $n(\\psi) = (-\\sin\\psi, \\cos\\psi)$ (2,) at the polar angle of
-        the involute's base point turned into the slice, $\\psi = \\operatorname{inv}\\alpha_{wt}
-        - u/r_b \\pm \\Phi$, plus $\\pi$ on the gear (`placements`; the half base thickness
-        cancels).
-
-        The $\\pi$ is applied exactly, as a change of sign, not added to the angle: in float32
-        the sum would keep the rest only to an ulp of $\\pi$ (2.4e-7 rad, 0.04 µm at the seed
-        gear's base radius)."""
-        sense = 1.0 if gear == 0 else -1.0
-        psi = involute(self.working_pressure_angle) - u / self.base_radius[..., gear] + sense * as_float(slice_rotation)
-        c, s = jnp.cos(psi), jnp.sin(psi)
-        if gear == 1:
-            c, s = -c, -s
-        return jnp.stack([c, s], -1), jnp.stack([-s, c], -1)
+        return involute_tangent(self.base_radius[..., gear], self._base_angle(gear), as_float(u))[2]
 
     def slice_point(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
                     depth: ArrayLike = 0.0) -> Float[Array, "2"]:
@@ -365,6 +312,9 @@ class AbstractInvolutePair(AbstractFlankPair):
         u = as_float(u)
         offset = depth / self.transverse_normal_fraction(gear, u, z)
         return self._offset_point(gear, u, offset, *self._slice_frame(gear, u, slice_rotation))
+
+    def _slice_frame(self, gear: int, u: Array, slice_rotation: ArrayLike):
+        return slice_frame(gear, self.working_pressure_angle, self.base_radius[..., gear], u, slice_rotation)
 
     def _offset_point(self, gear: int, u: Array, offset, radial, normal) -> Float[Array, "2"]:
         """$O + r_b e_r + (s - o)\\,n$ for the transverse offset $o$ (mm)."""
@@ -418,7 +368,6 @@ class AbstractInvolutePair(AbstractFlankPair):
         y = -rb1 * jnp.sin(alpha) + roll_length * jnp.cos(alpha)
         return jnp.stack([x, y, jnp.broadcast_to(as_float(z), jnp.shape(x))], -1)
 
-
     def resolve(self):
         return resolve_derived(self)
 
@@ -445,10 +394,3 @@ class AbstractInvolutePair(AbstractFlankPair):
             "start_of_active_profile_roll_mm": self.start_of_active_profile,
             "tip_roll_length_mm": self.tip_roll_length,
         }
-
-
-def _per_gear(value: ArrayLike) -> Float[Array, "2"]:
-    arr = as_float(value)
-    if arr.ndim == 0 or arr.shape[-1] != 2:
-        arr = jnp.stack([arr, arr], axis=-1)
-    return arr
