@@ -62,43 +62,47 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
         return 2
     best_scene = Path(out) / "best_scene.toml"
     best_scene.write_text(best_scene_toml(data, result.best_design))
-    unit = QUANTITIES[objective.quantity][0]
-    cert = result.certification
-    report = {
-        "optimize": {
-            "method": result.method,
-            "objective": objective.quantity,
-            "objective_unit": unit,
-            "aggregate": objective.aggregate,
-            "loads_Nm": (np.asarray(objective.torques) / 1000.0).tolist(),
-            "error_samples": objective.samples,
-            "accuracy": accuracy_name(objective.scene.accuracy),
-            "initial_objective_N": result.initial_objective,
-            "best_objective_N": result.best_objective,
-            "best_source": result.best_source,
-            "certification_accuracy": None if cert is None else cert.accuracy,
-            "certified_objective_N": result.certified_objective,
-            "certified_candidates": None if cert is None else [
-                {"modification": design_dict(d), "objective_N": float(v), "certified_objective_N": float(c)}
-                for d, v, c in zip(cert.designs, cert.objective, cert.certified)
-            ],
-            "initial_modification": design_dict(result.initial_design),
-            "best_modification": design_dict(result.best_design),
-            "evaluations": result.evaluations,
-            "gradient_evaluations": result.gradient_evaluations,
-            "steps": result.steps,
-            "wall_time_s": result.wall_time_s,
-            "history": result.history,
-            "converged": result.converged,
-            "run_dir": result.run_dir,
-            "best_scene": str(best_scene),
-        }
-    }
+    report = {"optimize": _report(objective, result, best_scene)}
     if as_json:
         print(json.dumps(report, indent=2))
     else:
         print(summary(report["optimize"]))
     return 0
+
+
+def _report(objective, result, best_scene: Path) -> dict:
+    """The run's report: the "optimize" object of `--json` (loads in N·m, designs as
+    modification dicts)."""
+    unit = QUANTITIES[objective.quantity][0]
+    cert = result.certification
+    return {
+        "method": result.method,
+        "objective": objective.quantity,
+        "objective_unit": unit,
+        "aggregate": objective.aggregate,
+        "loads_Nm": (np.asarray(objective.torques) / 1000.0).tolist(),
+        "error_samples": objective.samples,
+        "accuracy": accuracy_name(objective.scene.accuracy),
+        "initial_objective_N": result.initial_objective,
+        "best_objective_N": result.best_objective,
+        "best_source": result.best_source,
+        "certification_accuracy": None if cert is None else cert.accuracy,
+        "certified_objective_N": result.certified_objective,
+        "certified_candidates": None if cert is None else [
+            {"modification": design_dict(d), "objective_N": float(v), "certified_objective_N": float(c)}
+            for d, v, c in zip(cert.designs, cert.objective, cert.certified)
+        ],
+        "initial_modification": design_dict(result.initial_design),
+        "best_modification": design_dict(result.best_design),
+        "evaluations": result.evaluations,
+        "gradient_evaluations": result.gradient_evaluations,
+        "steps": result.steps,
+        "wall_time_s": result.wall_time_s,
+        "history": result.history,
+        "converged": result.converged,
+        "run_dir": result.run_dir,
+        "best_scene": str(best_scene),
+    }
 
 
 def summary(o: dict) -> str:

@@ -154,14 +154,8 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
     if not isinstance(objective, Objective):
         raise ValueError("objective must be a gearjax.optimize.Objective (Objective.create(scene, ...))")
     start = time.perf_counter()
-    directory = None
-    records: list[dict] = []
-    state = init_state
-    if run_dir is not None:
-        directory = RunDirectory(run_dir, _description(method, objective, space, config, seed, steps), resume)
-        loaded = directory.load(init_state) if resume else None
-        if loaded is not None:
-            state, records = loaded
+    directory, state, records = _resume(run_dir, resume, init_state,
+                                        _description(method, objective, space, config, seed, steps))
     previous_time = records[-1]["elapsed_s"] if records else 0.0
     initial_design = np.asarray(objective.scene.modification.as_vector())
     program = "the GA's batch program" if method == "ga" else "the value-and-gradient program"
@@ -175,17 +169,8 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
             state, designs, values = step_fn(state)
             best, best_design = _best(method, state, space)
             elapsed = previous_time + time.perf_counter() - start
-            record = {
-                "step": step,
-                "designs_mm": np.asarray(designs).tolist(),
-                "objective": [float(v) for v in np.asarray(values)],
-                "best_objective": best,
-                "best_design_mm": best_design.tolist(),
-                "evaluations": step * batch * samples,
-                "elapsed_s": elapsed,
-                "initial_objective": initial,
-                "random_key": np.asarray(getattr(state, "key", jnp.zeros(2, jnp.uint32))).tolist(),
-            }
+            record = _record(step, state, designs, values, best, best_design, step * batch * samples, elapsed,
+                             initial)
             records.append(record)
             if directory is not None:
                 directory.save(state, record)
@@ -207,11 +192,6 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         best_design, best = initial_design, float(initial)
     source = "initial" if _same_design(best_design, initial_design) else "search"
     history = [r["best_objective"] for r in records]
-    if method == "gradient":
-        converged = not bool(np.any(np.asarray(state.active)))
-    else:
-        tail = history[-max(2, len(history) // 4):]
-        converged = len(history) >= 4 and tail[0] == tail[-1]
     evaluations = len(records) * batch * samples
     return OptimizationResult(
         method=method,
@@ -224,12 +204,47 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         gradient_evaluations=evaluations if method == "gradient" else 0,
         steps=len(records),
         wall_time_s=previous_time + time.perf_counter() - start,
-        converged=converged,
+        converged=_converged(method, state, history),
         run_dir=None if directory is None else str(directory.path),
         certified_objective=None if certification is None else float(certification.certified[certification.best]),
         certification=certification,
         best_source=source,
     )
+
+
+def _resume(run_dir, resume, init_state, description):
+    """The run directory (None without one), and the state and step records to continue from
+    (`init_state` and none for a new run)."""
+    if run_dir is None:
+        return None, init_state, []
+    directory = RunDirectory(run_dir, description, resume)
+    loaded = directory.load(init_state) if resume else None
+    state, records = loaded if loaded is not None else (init_state, [])
+    return directory, state, records
+
+
+def _record(step, state, designs, values, best, best_design, evaluations, elapsed, initial) -> dict:
+    """One step's record, as the run directory stores it (designs in mm)."""
+    return {
+        "step": step,
+        "designs_mm": np.asarray(designs).tolist(),
+        "objective": [float(v) for v in np.asarray(values)],
+        "best_objective": best,
+        "best_design_mm": best_design.tolist(),
+        "evaluations": evaluations,
+        "elapsed_s": elapsed,
+        "initial_objective": initial,
+        "random_key": np.asarray(getattr(state, "key", jnp.zeros(2, jnp.uint32))).tolist(),
+    }
+
+
+def _converged(method, state, history) -> bool:
+    """Gradient descent: every start stopped. GA: the best value unchanged over the last
+    quarter of at least four generations."""
+    if method == "gradient":
+        return not bool(np.any(np.asarray(state.active)))
+    tail = history[-max(2, len(history) // 4):]
+    return len(history) >= 4 and tail[0] == tail[-1]
 
 
 #: designs closer than this in every parameter (mm) are the same design (a design passed

@@ -68,7 +68,6 @@ def run_impact_sweep(
         parts included), `chunks`, `chunk_length`, `files`.
     """
     from ._axes import _speeds, _torques
-    from .loads import impact_sweep
 
     _torques(None, torques_Nm), _speeds(None, speeds_rpm)  # impact_sweep's checks, before any work
     torques_Nm, speeds_rpm = np.asarray(torques_Nm, dtype=float), np.asarray(speeds_rpm, dtype=float)
@@ -81,33 +80,22 @@ def run_impact_sweep(
     if resume and out is None:
         raise ValueError("resume needs a run directory (out)")
     accuracy = _accuracy_name(scene)
-    directory, records = None, []
-    if out is not None:
-        description = {
-            "kind": "impact_sweep",
-            "scene_sha256": scene_digest(scene),
-            "accuracy": accuracy,
-            "torque_Nm": torques_Nm.tolist(),
-            "speed_rpm": speeds_rpm.tolist(),
-            "chunk_length": length,
-        }
-        directory = RunDirectory(out, description, resume)
-        if resume:
-            loaded = directory.load({"chunks": np.zeros((), np.int32)})
-            if loaded is not None:
-                records = loaded[1]
+    directory, records = _resume(out, resume, {
+        "kind": "impact_sweep",
+        "scene_sha256": scene_digest(scene),
+        "accuracy": accuracy,
+        "torque_Nm": torques_Nm.tolist(),
+        "speed_rpm": speeds_rpm.tolist(),
+        "chunk_length": length,
+    })
     start = time.perf_counter()
     previous = records[-1]["elapsed_s"] if records else 0.0
     bar = Progress(progress, chunks, len(records), "chunk")
     try:
         for k in range(len(records), chunks):
-            part = torques_Nm[k * length:(k + 1) * length]
-            padded = np.concatenate([part, np.repeat(part[-1:], length - part.shape[0])])
             first = k == len(records)  # the chunk that compiles the sweep's program
-            with compiling("the impact sweep's program for this scene structure and chunk",
-                           mode=progress if first else None):
-                sweep = impact_sweep(scene, torques_Nm=padded, speeds_rpm=speeds_rpm, throw=False)
-            rows = {key: value[: part.shape[0]] for key, value in sweep_rows(sweep).items() if key not in _PER_RUN}
+            rows = _chunk_rows(scene, torques_Nm[k * length:(k + 1) * length], length, speeds_rpm,
+                               progress if first else None)
             elapsed = previous + time.perf_counter() - start
             record = {"step": k + 1, "rows": rows, "elapsed_s": elapsed}
             records.append(record)
@@ -129,6 +117,26 @@ def run_impact_sweep(
     if directory is not None:
         report["files"] = write_results(report, directory.path)
     return report
+
+
+def _resume(out, resume, description) -> tuple[RunDirectory | None, list[dict]]:
+    """The run directory (None without `out`) and the chunk records finished before."""
+    if out is None:
+        return None, []
+    directory = RunDirectory(out, description, resume)
+    loaded = directory.load({"chunks": np.zeros((), np.int32)}) if resume else None
+    return directory, [] if loaded is None else loaded[1]
+
+
+def _chunk_rows(scene, torques_Nm, length, speeds_rpm, progress) -> dict:
+    """`sweep_rows` of one chunk: `torques_Nm` padded to `length` (one program for every
+    chunk) and swept, the padding dropped; `progress` announces the compilation."""
+    from .loads import impact_sweep
+
+    padded = np.concatenate([torques_Nm, np.repeat(torques_Nm[-1:], length - torques_Nm.shape[0])])
+    with compiling("the impact sweep's program for this scene structure and chunk", mode=progress):
+        sweep = impact_sweep(scene, torques_Nm=padded, speeds_rpm=speeds_rpm, throw=False)
+    return {key: value[: torques_Nm.shape[0]] for key, value in sweep_rows(sweep).items() if key not in _PER_RUN}
 
 
 def sweep_rows(sweep) -> dict:
