@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 
 import jax
 import jax.numpy as jnp
@@ -21,6 +22,15 @@ def test_a_slow_block_says_what_it_compiles_and_how_long_it_took(capsys):
     assert lines[0].startswith("gearjax: compiling the test program (")
     assert lines[-1].startswith("gearjax: the test program ready in ")
     assert stats["elapsed_s"] >= stats["compile_s"] > 0.0
+
+
+@pytest.mark.parametrize("mode", ["lines", "bar"])
+def test_a_block_stopped_by_an_error_says_so_not_ready(capsys, mode):
+    with pytest.raises(ZeroDivisionError), compiling("the failing program", mode=mode, delay=0.0):
+        time.sleep(0.05)  # let the notice appear
+        1 / 0
+    err = capsys.readouterr().err
+    assert "stopped by an error after" in err and "ready in" not in err
 
 
 @pytest.mark.parametrize("mode", ["lines", "bar", None])

@@ -81,7 +81,8 @@ def compiling(what: str, mode: str | None = "auto", delay: float = NOTICE_DELAY_
     DIR)` on standard error: on a terminal (`"bar"`) one line that counts the seconds
     until the block ends, otherwise (`"lines"`) that line and, at the end, one more with the
     time taken. A block done sooner prints nothing. The closing words say whether XLA
-    compiled anything (JAX's monitoring events): "compiled" or "loaded from the cache".
+    compiled anything (JAX's monitoring events): "compiled" or "loaded from the cache"; or,
+    where the block raised, that it stopped (the error itself propagates).
 
     Yields a dict that holds, once the block is done, `elapsed_s`, `compile_s` (seconds
     XLA spent compiling) and `loaded` (programs loaded from JAX's persistent cache).
@@ -124,8 +125,10 @@ def compiling(what: str, mode: str | None = "auto", delay: float = NOTICE_DELAY_
     jax.monitoring.register_event_duration_secs_listener(on_duration)
     jax.monitoring.register_event_listener(on_event)
     thread.start()
+    finished = False
     try:
         yield stats
+        finished = True
     finally:
         done.set()
         thread.join()
@@ -136,7 +139,8 @@ def compiling(what: str, mode: str | None = "auto", delay: float = NOTICE_DELAY_
         if shown.is_set():
             how = ("loaded from the cache" if stats["compile_s"] < 0.1 * stats["elapsed_s"]
                    else f"XLA compiled for {stats['compile_s']:.1f} s")
-            end = f"ready in {stats['elapsed_s']:.1f} s ({how})"
+            end = (f"ready in {stats['elapsed_s']:.1f} s ({how})" if finished
+                   else f"stopped by an error after {stats['elapsed_s']:.1f} s")
             if mode == "bar":
                 print(f"\r{line}: {end}", file=sys.stderr, flush=True)
             else:
