@@ -148,11 +148,7 @@ def _initial_objective(method: str, objective: Objective, space: DesignSpace, de
 
 def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch,
          certify_accuracy, certify_top):
-    check_int("steps (generations or iterations)", steps, 1)
-    check_int("certify_top", certify_top, 1)
-    certify_accuracy = certification_accuracy(certify_accuracy)
-    if not isinstance(objective, Objective):
-        raise ValueError("objective must be a gearjax.optimize.Objective (Objective.create(scene, ...))")
+    certify_accuracy = _checked(objective, steps, certify_top, certify_accuracy)
     start = time.perf_counter()
     directory, state, records = _resume(run_dir, resume, init_state,
                                         _description(method, objective, space, config, seed, steps))
@@ -210,6 +206,15 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         certification=certification,
         best_source=source,
     )
+
+
+def _checked(objective, steps, certify_top, certify_accuracy):
+    """The run's inputs checked before any work; returns the certification `Accuracy`."""
+    check_int("steps (generations or iterations)", steps, 1)
+    check_int("certify_top", certify_top, 1)
+    if not isinstance(objective, Objective):
+        raise ValueError("objective must be a gearjax.optimize.Objective (Objective.create(scene, ...))")
+    return certification_accuracy(certify_accuracy)
 
 
 def _resume(run_dir, resume, init_state, description):
