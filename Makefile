@@ -6,7 +6,7 @@ PYTHON ?=
 VENV   := .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test docs bench clean
+.PHONY: demo test docs notebooks bench clean
 
 # Creates the environment, installs gearjax and runs the built-in default scene.
 demo:
@@ -23,6 +23,12 @@ test:
 docs:
 	sh tools/setup_env.sh $(VENV) docs $(PYTHON)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+# Runs every notebook and stores its outputs (figures, printed results and the convergence
+# check) in the file: minutes per notebook.
+notebooks:
+	sh tools/setup_env.sh $(VENV) dev,plot $(PYTHON)
+	$(BIN)/python tools/run_notebooks.py
 
 # Benchmarks are not tests: they time things and write benchmarks/results/*.json.
 bench:

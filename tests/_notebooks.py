@@ -7,17 +7,21 @@ process (`HOSTS`), where they are already traced and compiled: notebook 06 compu
 gradients of `test_optimize.py`'s objective, a program that is never in the cache
 (`gearjax.runtime.cache`), so a kernel compiled it a second time (about 4 minutes on 2 cores);
 notebook 05 runs `test_impact.py`'s scenes. The cells run in order in one namespace, as
-a kernel runs them; a cell with IPython syntax (magics, shell escapes) is refused, since
+a kernel runs them, with `GEARJAX_NOTEBOOK_QUICK=1` (the notebook's coarse grid, no
+convergence check); a cell with IPython syntax (magics, shell escapes) is refused, since
 plain Python would not run it as IPython does.
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import nbformat
 
 NOTEBOOK_DIR = Path(__file__).resolve().parent.parent / "notebooks"
+#: set to 1, a notebook runs on its coarse grid and skips its convergence check
+QUICK = "GEARJAX_NOTEBOOK_QUICK"
 
 #: notebook -> the test file that runs it in its own process (and shares its programs)
 HOSTS = {"05_mesh_in_impact.ipynb": "test_impact.py", "06_optimisation.ipynb": "test_optimize.py"}
@@ -35,6 +39,8 @@ def execute_in_process(name: str) -> dict:
 
     nb = nbformat.read(NOTEBOOK_DIR / name, as_version=4)
     namespace: dict = {"__name__": "__main__"}
+    quick = os.environ.get(QUICK)
+    os.environ[QUICK] = "1"  # the notebook's coarse grid, as in a kernel (`test_notebooks.py`)
     try:
         for k, cell in enumerate(c for c in nb.cells if c.cell_type == "code"):
             lines = cell.source.splitlines()
@@ -44,4 +50,8 @@ def execute_in_process(name: str) -> dict:
             exec(compile(cell.source, f"{name}[cell {k}]", "exec"), namespace)
     finally:
         plt.close("all")
+        if quick is None:
+            del os.environ[QUICK]
+        else:
+            os.environ[QUICK] = quick
     return namespace
