@@ -34,14 +34,19 @@ def half_tooth_angle(teeth, shift, pressure_angle_t, pressure_angle_n, radius, b
 
 
 def involute_tangent(base_radius: ArrayLike, base_angle: ArrayLike, roll_length: ArrayLike):
-    r"""`involute_point` $P$, its derivative $\mathrm{d}P/\mathrm{d}s = (s/r_b)(\cos\theta,
-    \sin\theta)$ and its outward unit normal $(-\sin\theta, \cos\theta)$ (defined down to
-    the base circle), in closed form."""
+    r"""`involute_point` $P$ and its derivative $\mathrm{d}P/\mathrm{d}s = (s/r_b)(\cos\theta,
+    \sin\theta)$, in closed form."""
     theta = base_angle - roll_length / base_radius
     c, s = jnp.cos(theta), jnp.sin(theta)
     point = jnp.stack([base_radius * c - roll_length * s, base_radius * s + roll_length * c], -1)
-    tangent = (roll_length / base_radius)[..., None] * jnp.stack([c, s], -1)
-    return point, tangent, jnp.stack([-s, c], -1)
+    return point, (roll_length / base_radius)[..., None] * jnp.stack([c, s], -1)
+
+
+def involute_normal(base_radius: ArrayLike, base_angle: ArrayLike, roll_length: ArrayLike):
+    r"""Outward unit normal $(-\sin\theta, \cos\theta)$ of `involute_point`, defined down to
+    the base circle."""
+    theta = base_angle - roll_length / base_radius
+    return jnp.stack([-jnp.sin(theta), jnp.cos(theta)], -1)
 
 
 def slice_frame(gear: int, working_pressure_angle, base_radius, roll_length, slice_rotation):

@@ -35,7 +35,7 @@ from .._numerics import as_float, involute, inverse_involute, safe_sqrt
 from .._validate import check_range, is_concrete
 from ._base import AbstractFlankPair, derived, resolve_derived
 from .involute_checks import check_feasible, check_section_inputs, per_gear
-from .involute_curve import half_tooth_angle, involute_point, involute_tangent, slice_frame
+from .involute_curve import half_tooth_angle, involute_normal, involute_point, involute_tangent, slice_frame
 
 
 class AbstractInvolutePair(AbstractFlankPair):
@@ -299,11 +299,11 @@ class AbstractInvolutePair(AbstractFlankPair):
 
     def profile_tangent(self, gear: int, u: ArrayLike):
         """Point and $\\mathrm{d}P/\\mathrm{d}s$ (`involute_tangent`)."""
-        return involute_tangent(self.base_radius[..., gear], self._base_angle(gear), as_float(u))[:2]
+        return involute_tangent(self.base_radius[..., gear], self._base_angle(gear), as_float(u))
 
     def profile_normal(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
         """$(-\\sin\\theta, \\cos\\theta)$, defined down to the base circle."""
-        return involute_tangent(self.base_radius[..., gear], self._base_angle(gear), as_float(u))[2]
+        return involute_normal(self.base_radius[..., gear], self._base_angle(gear), as_float(u))
 
     def slice_point(self, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
                     depth: ArrayLike = 0.0) -> Float[Array, "2"]:
