@@ -14,6 +14,9 @@ from .units import newton_metre_to_newton_mm, rpm_to_rad_per_s
 #: catch unit slips by orders of magnitude.
 _MAX_TORQUE = 1e12
 _MAX_SPEED = 1e6
+#: The same limits in the scene file's units (N·m, rpm).
+MAX_TORQUE_NM = _MAX_TORQUE / 1000.0
+MAX_SPEED_RPM = _MAX_SPEED * 60.0 / (2.0 * np.pi)
 
 
 class OperatingPoint(eqx.Module):
@@ -52,13 +55,13 @@ class OperatingPoint(eqx.Module):
         if speed is not None and speed_rpm is not None:
             raise ValueError("give the speed once: either speed (rad/s) or speed_rpm (rev/min), not both")
         if torque_Nm is not None:
-            check_range("torque_Nm", torque_Nm, 0.0, _MAX_TORQUE / 1000.0, unit="N·m")
+            check_range("torque_Nm", torque_Nm, 0.0, MAX_TORQUE_NM, unit="N·m")
             torque = newton_metre_to_newton_mm(as_float(torque_Nm))
         elif torque is not None:
             check_range("torque", torque, 0.0, _MAX_TORQUE, unit="N·mm")
             torque = as_float(torque)
         if speed_rpm is not None:
-            check_range("speed_rpm", speed_rpm, 0.0, _MAX_SPEED * 60.0 / (2.0 * np.pi), unit="rpm")
+            check_range("speed_rpm", speed_rpm, 0.0, MAX_SPEED_RPM, unit="rpm")
             speed = rpm_to_rad_per_s(as_float(speed_rpm))
         else:
             speed = 0.0 if speed is None else speed

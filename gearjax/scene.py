@@ -168,11 +168,13 @@ def _effects(pair: AbstractGearPair, operating: OperatingPoint, effects) -> froz
         effects = effects | {"ltca"}
     for effect in ("ltca", "impact"):
         if effect in effects and operating.torque is None:
-            raise ValueError(f"effects '{effect}' needs a torque: give operating=OperatingPoint(torque=...)")
+            raise ValueError(f"effects '{effect}' needs a torque: OperatingPoint(torque=...), in a scene file "
+                             "[operating] torque_Nm")
     unsupported = effects - pair.supported_effects
     if unsupported:
         raise ValueError(
-            f"effects {sorted(effects)} (a torque) are not available for {type(pair).__name__}, "
+            f"effects {sorted(effects)} (a torque) are not available for "
+            f"{pair.scene_file.description if pair.scene_file else type(pair).__name__}, "
             f"which supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
             + (f": {pair.effects_note}" if pair.effects_note else "")
         )

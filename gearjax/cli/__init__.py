@@ -131,7 +131,9 @@ def _caches(args: argparse.Namespace):
 COMMANDS = ("run", "reproduce", "optimize", "sweep")
 
 
-def main(argv: list[str] | None = None) -> int:
+def build_parser() -> tuple[argparse.ArgumentParser, dict]:
+    """The `gearjax` parser with its sub-commands, and the commands' modules by name (the
+    documentation's CLI reference is generated from it)."""
     import importlib
 
     parser = _Parser(prog="gearjax", description="Differentiable gear contact engine.")
@@ -139,12 +141,17 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     modules = {name: importlib.import_module(f".{name}", __name__) for name in COMMANDS}
     for name, module in modules.items():
-        command = sub.add_parser(name, help=module.HELP)
+        command = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(command)
         command.add_argument(
             "--no-cache", action="store_true",
             help="do not use the compilation and program caches ($GEARJAX_CACHE_DIR, default ~/.cache/gearjax/jax)",
         )
+    return parser, modules
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser, modules = build_parser()
     args = parser.parse_args(_attach_values(sys.argv[1:] if argv is None else list(argv)))
     _enable_x64()
     with _caches(args):

@@ -23,7 +23,7 @@ HELP = "tune the pinion modification for a small mesh-in impact ([optimize] sect
 def add_arguments(parser) -> None:
     parser.add_argument("scene", nargs="?",
                         help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
-    parser.add_argument("--method", choices=["ga", "gradient"], help="overrides optimize.method")
+    parser.add_argument("--method", choices=["ga", "gradient"], help="overrides [optimize] method")
     parser.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument("--json", action="store_true", help="print one JSON object")

@@ -10,7 +10,7 @@ HELP = "a paper's quantities beside gearjax's"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("paper", choices=["curvilinear", "dca"], help="curvilinear: seed 002; dca: seeds 000/003")
+    parser.add_argument("paper", choices=["curvilinear", "dca"], help="curvilinear: the involute curvilinear-tooth paper; dca: the double-circular-arc meshing-impact paper (Li, Wu, Zhu 2015)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument(
         "--cross-check", action="store_true",

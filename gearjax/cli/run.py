@@ -11,7 +11,7 @@ HELP = "simulate a scene (default: the built-in seed 001 scene)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scene", nargs="?", help="TOML scene file")
+    parser.add_argument("scene", nargs="?", help="TOML scene file (default: the built-in scene)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 

@@ -18,6 +18,7 @@ from ..geometry.modification import FlankModification
 from ..ltca import COMPLIANCE_MODELS
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from ..units import Material
+from .scene_keys import check_declared, field_message
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -76,6 +77,10 @@ _ERROR_KEYS = {
 }
 _OPERATING_KEYS = {"torque_Nm", "speed_rpm"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio", "density"}
+_IMPACT_KEYS = {"inertia_kg_m2"}
+#: The `Scene` constructor's keywords that its errors name: (section, file key).
+_SCENE_FIELDS = {"hub_radius": ("ltca", "hub_radius"), "inertia": ("impact", "inertia_kg_m2"),
+                 "compliance": ("ltca", "compliance")} | {name: ("modification", key) for key, (name, _) in _MOD_KEYS.items()}
 _LTCA_KEYS = {"compliance", "hub_radius", "extended_contact"}.union(*(cls.scene_file.keys for cls in COMPLIANCE_MODELS))
 _ANALYSIS_KEYS = {"accuracy", "effects", "tca_method", "positions_per_pitch", "face_slices", "dtype", "pitches"}
 
@@ -108,15 +113,16 @@ def _numbers(section: str, key: str, value: Any, n: int) -> tuple:
     return tuple(_number(section, key, v) for v in value)
 
 
-def _build(section: str, factory, **kwargs):
-    """Call a constructor, prefixing its ValueError with the section name."""
+def _build(section: str, factory, fields: dict | None = None, **kwargs):
+    """Call a constructor; its ValueError in the scene file's style (`field_message`), the
+    keywords named by their file keys (`fields`: keyword -> (section, key))."""
     try:
         return factory(**kwargs)
     except SceneFileError:
         raise
     except ValueError as err:
-        message = str(err)  # already naming its section, or prefixed with this one
-        raise SceneFileError(message if message.startswith("[") else f"[{section}] {message}") from None
+        names = {k: (section, k) for k in kwargs} | (fields or {})
+        raise SceneFileError(field_message(section, str(err), names)) from None
 
 
 def scene_from_dict(data: dict) -> Scene:
@@ -124,6 +130,12 @@ def scene_from_dict(data: dict) -> Scene:
     if not isinstance(data, dict):
         raise SceneFileError("scene: the file must be a TOML table")
     _unknown("scene", data, _SECTIONS)
+    for section, table in data.items():
+        if section not in ("pair", "optimize") and isinstance(table, dict):
+            try:
+                check_declared(section, table)
+            except ValueError as err:
+                raise SceneFileError(str(err)) from None
     if "pair" not in data:
         raise _fail("pair", "missing section: every scene needs a [pair]")
     pair = _pair_from(data["pair"])
@@ -138,6 +150,7 @@ def scene_from_dict(data: dict) -> Scene:
     return _build(
         "analysis",
         Scene,
+        _SCENE_FIELDS,
         pair=pair,
         modification=modification,
         gear_modification=gear_modification,
@@ -171,7 +184,8 @@ def _pair_from(p: dict):
             continue
         keyword, kind, _, factor = spec.keys[key]
         kwargs[keyword] = _read_value("pair", key, kind, value, factor)
-    return _build("pair", cls, **kwargs)
+    fields = {keyword: ("pair", key) for key, (keyword, *_) in spec.keys.items()} | {key: ("pair", key) for key in spec.keys}
+    return _build("pair", cls, fields, **kwargs)
 
 
 def pair_reference() -> str:
@@ -264,7 +278,7 @@ def _modification_from(data: dict, section: str):
     table = data[section]
     _unknown(section, table, _MOD_KEYS)
     args = {name: _number(section, key, table[key]) * scale for key, (name, scale) in _MOD_KEYS.items() if key in table}
-    return _build(section, FlankModification, **args)
+    return _build(section, FlankModification, {name: (section, key) for key, (name, _) in _MOD_KEYS.items()}, **args)
 
 
 def _errors_from(data: dict):
@@ -273,7 +287,7 @@ def _errors_from(data: dict):
         return None
     table = data["errors"]
     _unknown("errors", table, _ERROR_KEYS)
-    return _build("errors", MeshErrors, **{name: _number("errors", key, table[key]) * 1e-3 for key, name in _ERROR_KEYS.items() if key in table})
+    return _build("errors", MeshErrors, {name: ("errors", key) for key, name in _ERROR_KEYS.items()}, **{name: _number("errors", key, table[key]) * 1e-3 for key, name in _ERROR_KEYS.items() if key in table})
 
 
 def _operating_from(data: dict):
@@ -313,7 +327,7 @@ def _ltca_from(ltca: dict):
             raise _fail(f"ltca.{key}", f"applies to compliance = {' or '.join(repr(o) for o in owners)} only")
         keyword, value_kind, _, factor = spec.keys[key]
         options[keyword] = _read_value("ltca", key, value_kind, value, factor)
-    compliance = _build("ltca", by_name[kind], **options)
+    compliance = _build("ltca", by_name[kind], {kw: ("ltca", key) for key, (kw, *_) in spec.keys.items()}, **options)
     hub_radius = None
     if "hub_radius" in ltca:
         value = ltca["hub_radius"]
@@ -327,7 +341,7 @@ def _ltca_from(ltca: dict):
 
 def _inertia_from(impact: dict):
     """[impact]: $(J_1, J_2)$ in t·mm² from kg·m², or None (solid discs)."""
-    _unknown("impact", impact, {"inertia_kg_m2"})
+    _unknown("impact", impact, _IMPACT_KEYS)
     if "inertia_kg_m2" not in impact:
         return None
     # 1 kg m^2 = 1e-3 t * 1e6 mm^2 = 1e3 t mm^2
@@ -344,7 +358,7 @@ def _analysis_from(analysis: dict):
         if overrides:
             accuracy = accuracy.replace(**overrides)
     except ValueError as err:
-        raise SceneFileError(f"[analysis] {err}") from None
+        raise SceneFileError(field_message("analysis", str(err), {k: ("analysis", k) for k in _ANALYSIS_KEYS})) from None
     effects = analysis.get("effects", [])
     if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
         raise _fail("analysis.effects", f"must be a list of strings from {EFFECTS}; got {effects!r}")

@@ -39,6 +39,7 @@ import dataclasses
 from typing import Any
 
 from ..accuracy import Accuracy
+from ..io.scene_keys import check_declared
 from ..scene import Scene
 from .certification import scene_with_accuracy
 from .ga import GAConfig
@@ -113,6 +114,10 @@ class OptimizeSettings:
         for key in table:
             if key not in _KEYS:
                 raise _fail(key, f"unknown field; allowed: {', '.join(sorted(_KEYS))}")
+        try:
+            check_declared("optimize", table)
+        except ValueError as err:
+            raise SettingsError(str(err)) from None
         out: dict[str, Any] = {}
         if "method" in table:
             out["method"] = _choice("method", table["method"], METHODS)

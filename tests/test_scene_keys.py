@@ -1,0 +1,123 @@
+"""The scene-file reference (`gearjax.io.scene_keys`) against the readers it documents:
+the same keys, the declared bounds and the declared defaults."""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from pathlib import Path
+
+import equinox as eqx
+import pytest
+
+from gearjax.io import scene_file
+from gearjax.io.scene_keys import SceneKey, reference, section_keys
+from gearjax.optimize import settings
+
+SECTIONS = section_keys()
+READERS = {
+    "modification": set(scene_file._MOD_KEYS),
+    "gear_modification": set(scene_file._MOD_KEYS),
+    "errors": set(scene_file._ERROR_KEYS),
+    "operating": scene_file._OPERATING_KEYS,
+    "material": scene_file._MATERIAL_KEYS,
+    "ltca": scene_file._LTCA_KEYS,
+    "impact": scene_file._IMPACT_KEYS,
+    "analysis": scene_file._ANALYSIS_KEYS,
+    "optimize": settings._KEYS,
+}
+BASE = tomllib.loads(scene_file.DEFAULT_SCENE_TOML)
+#: Keys whose value is a list of numbers: how one number is written as that list.
+LISTS = {"inertia_kg_m2": lambda v: [v, v], "loads_Nm": lambda v: [v], "load_weights": lambda v: [v]}
+CASES = [(section, key) for section, keys in SECTIONS.items() for key in keys]
+
+
+def _read(data: dict, section: str):
+    """What the section's reader makes of the file (the `[optimize]` settings, or the scene)."""
+    if section == "optimize":
+        return settings.OptimizeSettings.from_dict(data.get("optimize", {}))
+    return scene_file.scene_from_dict(data)
+
+
+def _with(section: str, key: str, value) -> dict:
+    data = copy.deepcopy(BASE)
+    table = data.setdefault(section, {})
+    if value is _ABSENT:
+        table.pop(key, None)
+    else:
+        table[key] = value
+    return data
+
+
+_ABSENT = object()
+
+
+def test_the_reference_declares_exactly_the_keys_the_readers_accept():
+    assert set(SECTIONS) == set(scene_file._SECTIONS) - {"pair"}
+    for section, keys in SECTIONS.items():
+        assert {k.key for k in keys} == set(READERS[section]), section
+
+
+def _id(case):
+    section, key = case
+    return f"{section}.{key.key}"
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c[1].bounds is not None], ids=_id)
+def test_each_declared_bound_is_the_readers(case):
+    """At an inclusive bound (or just inside an exclusive one) the file is read; one step
+    beyond it, the reader refuses it with one `[section] key: ...` line."""
+    section, key = case
+    low, high, low_in, high_in = key.bounds
+    write = LISTS.get(key.key, lambda v: v)
+    for bound, inclusive, outward in ((low, low_in, -1.0), (high, high_in, 1.0)):
+        if math.isinf(bound):
+            continue
+        step = 1 if key.integer else max(abs(bound) * 1e-6, 1e-9)
+        inside = bound if inclusive else bound - outward * step
+        beyond = bound + outward * step if inclusive else bound
+        if key.integer:
+            inside, beyond = int(inside), int(beyond)
+        _read(_with(section, key.key, write(inside)), section)
+        with pytest.raises(ValueError) as err:
+            _read(_with(section, key.key, write(beyond)), section)
+        message = str(err.value)
+        assert message.startswith(f"[{section}] {key.key}: "), message
+        assert "\n" not in message
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c[1].default is not None], ids=_id)
+def test_each_declared_default_is_what_leaving_the_key_out_gives(case):
+    section, key = case
+    without = _read(_with(section, key.key, _ABSENT), section)
+    written = _read(_with(section, key.key, key.default), section)
+    if section == "optimize":
+        assert written == without
+    else:
+        assert bool(eqx.tree_equal(written, without))
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c[1].choices is not None], ids=_id)
+def test_each_declared_choice_is_read_and_another_word_is_refused(case):
+    section, key = case
+    for choice in key.choices:
+        _read(_with(section, key.key, choice), section)
+    with pytest.raises(ValueError, match=rf"^\[{section}\] {key.key}: "):
+        _read(_with(section, key.key, "no-such-choice"), section)
+
+
+def test_an_undeclared_bound_would_be_caught():
+    """The bound check can fail: a declaration wider than the reader's range is refused
+    where the declaration says the file is read."""
+    wrong = SceneKey("poisson_ratio", "", 0.3, "", (0.0, 0.6, True, False))
+    with pytest.raises(ValueError):
+        _read(_with("material", wrong.key, 0.6 - 1e-6), "material")
+
+
+def test_scene_file_page_holds_the_generated_reference():
+    """`docs/scene_files.md` holds `reference()` (`python tools/scene_file_reference.py
+    --write` regenerates it)."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "scene_files.md").read_text()
+    block = page.split("<!-- section-keys:start (generated: tools/scene_file_reference.py) -->\n", 1)[1]
+    assert block.split("<!-- section-keys:end -->", 1)[0] == reference()
