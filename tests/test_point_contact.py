@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from gearjax.ltca.point_contact import pair_loads, section_compliance, share_load, shared_approach
+from gearjax.ltca.point_contact import pair_loads, section_compliance, share_load, shared_rotation
 
 E, NU = 206000.0, 0.3
 
@@ -40,44 +40,48 @@ def test_a_tapered_section_is_stiffer_at_the_root_than_the_tip_section():
     assert thick < c < thin
 
 
-def test_one_pair_takes_the_whole_load_with_its_own_approach():
-    c, h, gap, load = 2e-5, 3e-4, 0.004, 1800.0
-    z, loads = share_load(load, jnp.array([gap]), jnp.array([c]), jnp.array([h]))
-    np.testing.assert_allclose(z, gap + c * load + h * load ** (2 / 3), rtol=1e-12)
+def test_one_pair_takes_the_whole_torque_with_its_own_approach():
+    c, h, gap, arm, torque = 2e-5, 3e-4, 0.004, 45.0, 81000.0
+    theta, loads = share_load(torque, jnp.array([gap]), jnp.array([arm]), jnp.array([c]), jnp.array([h]))
+    load = torque / arm
+    np.testing.assert_allclose(arm * theta, gap + c * load + h * load ** (2 / 3), rtol=1e-12)
     np.testing.assert_allclose(loads, [load], rtol=1e-10)
 
 
-def test_the_pairs_carry_the_load_together_and_open_pairs_carry_none():
+def test_the_pairs_carry_the_torque_together_and_open_pairs_carry_none():
     gaps = jnp.array([0.0, 0.002, 0.2, jnp.inf])
+    arms = jnp.array([45.0, 44.0, 46.0, 45.0])
     linear = jnp.array([2e-5, 2.5e-5, 2e-5, 2e-5])
-    hertz = jnp.array([3e-4, 3e-4, 3e-4, 3e-4])
-    z, loads = share_load(2500.0, gaps, linear, hertz)
-    np.testing.assert_allclose(jnp.sum(loads), 2500.0, rtol=1e-10)
+    hertz = jnp.full(4, 3e-4)
+    theta, loads = share_load(110000.0, gaps, arms, linear, hertz)
+    np.testing.assert_allclose(jnp.sum(arms * loads), 110000.0, rtol=1e-10)
     assert float(loads[0]) > float(loads[1]) > 0.0  # the second pair touches later
-    assert float(loads[2]) == 0.0 and float(loads[3]) == 0.0 and float(z) < 0.2
-    # each loaded pair's approach is the shared one
+    assert float(loads[2]) == 0.0 and float(loads[3]) == 0.0 and float(arms[2] * theta) < 0.2
+    # each loaded pair's approach is its arm times the shared lag, less its gap
     closing = linear[:2] * loads[:2] + hertz[:2] * loads[:2] ** (2 / 3)
-    np.testing.assert_allclose(closing, z - gaps[:2], rtol=1e-9)
+    np.testing.assert_allclose(closing, arms[:2] * theta - gaps[:2], rtol=1e-9)
 
 
-def test_zero_load_gives_the_rigid_contact():
+def test_zero_torque_gives_the_rigid_contact():
     gaps = jnp.array([0.004, 0.001, jnp.inf])
-    z, loads = share_load(0.0, gaps, jnp.full(3, 2e-5), jnp.full(3, 3e-4))
-    assert float(z) == pytest.approx(0.001, abs=1e-15)
+    theta, loads = share_load(0.0, gaps, jnp.full(3, 40.0), jnp.full(3, 2e-5), jnp.full(3, 3e-4))
+    assert float(theta) == pytest.approx(0.001 / 40.0, abs=1e-16)
     assert np.all(np.asarray(loads) == 0.0)
 
 
 def test_batched_positions_and_the_derivatives_match_finite_differences():
     gaps = jnp.array([[0.0, 0.003], [0.001, 0.0]])
+    arms = jnp.full((2, 2), 45.0)
     linear, hertz = jnp.full((2, 2), 2e-5), jnp.full((2, 2), 3e-4)
-    z = shared_approach(jnp.array([900.0, 900.0]), gaps, linear, hertz)
-    assert z.shape == (2,)
-    np.testing.assert_allclose(jnp.sum(pair_loads(z[:, None], gaps, linear, hertz), -1), 900.0, rtol=1e-10)
+    theta = shared_rotation(jnp.array([40000.0, 40000.0]), gaps, arms, linear, hertz)
+    assert theta.shape == (2,)
+    np.testing.assert_allclose(jnp.sum(arms * pair_loads(theta[:, None], gaps, arms, linear, hertz), -1), 40000.0,
+                               rtol=1e-10)
 
-    def f(load, gap1):
-        return shared_approach(load, jnp.array([0.0, gap1]), linear[0], hertz[0])
+    def f(torque, gap1):
+        return shared_rotation(torque, jnp.array([0.0, gap1]), arms[0], linear[0], hertz[0])
 
-    for argnum, args, step in ((0, (900.0, 0.001), 1e-3), (1, (900.0, 0.001), 1e-8)):
+    for argnum, args, step in ((0, (40000.0, 0.001), 1e-2), (1, (40000.0, 0.001), 1e-8)):
         plus, minus = list(args), list(args)
         plus[argnum] += step
         minus[argnum] -= step

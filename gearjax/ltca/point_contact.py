@@ -22,10 +22,13 @@ infinite face (mm/N).
 **Load sharing.** Each tooth pair $k$ in mesh touches at one point with the rigid normal
 gap $e_k$ (mm, from the TCA) and carries $F_k \ge 0$ with the approach
 $c_kF_k + h_kF_k^{2/3}$ (linear tooth compliance $c_k$, Hertz coefficient $h_k$,
-`hertz_point`). All pairs share the rigid approach $Z$ of the gears, so
-$c_kF_k + h_kF_k^{2/3} = \max(Z - e_k, 0)$ and $\sum_k F_k = P$. Each $F_k(Z)$ is monotone,
-so is their sum: $Z$ by a safeguarded Newton iteration, the last step taken on the traced
-inputs so that derivatives are the implicit function's.
+`hertz_point`). A lag $\Theta$ of the gear moves every contact along its normal by
+$m_k\Theta$ ($m_k$, mm: the TCA's $r_{a2}|n_t|$), so
+$c_kF_k + h_kF_k^{2/3} = \max(m_k\Theta - e_k, 0)$ and the torque on the gear is
+$\sum_k m_kF_k = T$. Each $F_k(\Theta)$ is increasing and convex, so is the torque: $\Theta$
+by Newton's method from above (monotone), the last step taken on the traced inputs so that
+derivatives are the implicit function's. The mesh stiffness follows as
+$dT/d\Theta = \sum_k m_k^2\,dF_k/d\delta_k$.
 """
 
 from __future__ import annotations
@@ -86,59 +89,66 @@ def _pair_load(approach, linear, hertz):
     return s**3
 
 
-def pair_loads(approach: ArrayLike, gaps: ArrayLike, linear: ArrayLike, hertz: ArrayLike) -> Array:
-    """Loads $F_k$ (N) of the pairs at the shared approach $Z$ (mm; shape (..., 1) against
-    the pairs' (..., pair)): gaps $e_k$ (mm; `inf`
-    for a pair out of mesh), linear compliances $c_k$ (mm/N) and Hertz coefficients $h_k$
-    (mm/N^(2/3))."""
+def pair_loads(rotation: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear: ArrayLike, hertz: ArrayLike) -> Array:
+    r"""Loads $F_k$ (N) of the pairs at the gear's lag $\Theta$ (rad; shape (..., 1) against
+    the pairs' (..., pair)): normal gaps $e_k$ (mm; `inf` for a pair out of mesh), arms
+    $m_k$ (mm: the normal displacement of the pair's contact per radian of lag), linear
+    compliances $c_k$ (mm/N) and Hertz coefficients $h_k$ (mm/N^(2/3))."""
     gaps = jnp.asarray(gaps, float)
     finite = jnp.isfinite(gaps)
-    closing = jnp.where(finite, approach - jnp.where(finite, gaps, 0.0), 0.0)
+    closing = jnp.where(finite, arms * rotation - jnp.where(finite, gaps, 0.0), 0.0)
     return _pair_load(closing, linear, hertz)
 
 
-def _total_slope(approach, gaps, linear, hertz):
-    """$\\sum_k dF_k/dZ$ from $dF/d\\delta = 1/(c + \\tfrac23 hF^{-1/3})$ (0 out of contact)."""
-    loads = pair_loads(approach[..., None], gaps, linear, hertz)
+def _residual_and_slope(rotation, torque, gaps, arms, linear, hertz):
+    r"""$\sum_k m_kF_k - T$ and its derivative $\sum_k m_k^2\,dF_k/d\delta_k$, with
+    $dF/d\delta = 1/(c + \tfrac23 hF^{-1/3})$ (0 out of contact)."""
+    loads = pair_loads(rotation[..., None], gaps, arms, linear, hertz)
     s = jnp.cbrt(loads)
     safe = jnp.where(s > 0.0, s, 1.0)
-    return jnp.sum(jnp.where(s > 0.0, safe / (linear * safe + 2.0 / 3.0 * hertz), 0.0), axis=-1)
+    rate = jnp.where(s > 0.0, safe / (linear * safe + 2.0 / 3.0 * hertz), 0.0)
+    return jnp.sum(arms * loads, axis=-1) - torque, jnp.sum(arms**2 * rate, axis=-1)
 
 
-def shared_approach(load: ArrayLike, gaps: ArrayLike, linear: ArrayLike, hertz: ArrayLike) -> Array:
-    """The rigid approach $Z$ (mm) at which the pairs carry the normal load $P$ (N) together.
+def shared_rotation(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear: ArrayLike, hertz: ArrayLike) -> Array:
+    r"""The gear's lag $\Theta$ (rad) at which the pairs carry the torque $T$ together:
+    $\sum_k m_kF_k(m_k\Theta - e_k) = T$.
 
     Args:
-        load: $P$ (N), $\\ge 0$.
-        gaps: $e_k$ (mm), shape (pair,); `inf` for pairs out of mesh (at least one finite).
+        torque: $T$ (N·mm) about the gear's axis, $\ge 0$.
+        gaps: $e_k$ (mm), shape (..., pair); `inf` for pairs out of mesh (at least one
+            finite, and 0 at the binding pair of the rigid TCA).
+        arms: $m_k$ (mm), $> 0$.
         linear: $c_k$ (mm/N), $> 0$.
         hertz: $h_k$ (mm/N^(2/3)), $> 0$.
 
     Returns:
-        $Z$ (mm): $\\min_k e_k$ at zero load (the rigid TCA's contact), growing with $P$.
+        $\Theta$ (rad): $\min_k e_k/m_k$ at zero torque (the rigid contact), growing with $T$.
     """
     gaps = jnp.asarray(gaps, float)
-    lowest = jax.lax.stop_gradient(jnp.min(gaps, axis=-1))
+    lowest = jax.lax.stop_gradient(jnp.min(gaps / arms, axis=-1))
 
-    def residual(z, p, e, c, h):
-        return jnp.sum(pair_loads(z[..., None], e, c, h), axis=-1) - p
+    def newton(theta, *args):
+        value, slope = _residual_and_slope(theta, *args)
+        step = value / jnp.where(slope > 0.0, slope, 1.0)
+        return jnp.maximum(jnp.where(slope > 0.0, theta - step, theta), lowest)
 
-    def newton(z, p, e, c, h):
-        slope = _total_slope(z, e, c, h)
-        step = residual(z, p, e, c, h) / jnp.where(slope > 0.0, slope, 1.0)
-        return jnp.maximum(jnp.where(slope > 0.0, z - step, z), lowest)
-
-    fixed = jax.lax.stop_gradient((load, gaps, linear, hertz))
-    # start above the root (the convex sum makes Newton monotone from there)
-    z = lowest + jnp.max(fixed[2], axis=-1) * fixed[0] + jnp.max(fixed[3], axis=-1) * jnp.cbrt(fixed[0]) ** 2
-    z, _ = jax.lax.scan(lambda z, _: (newton(z, *fixed), None), z, None, length=APPROACH_STEPS)
-    z = jax.lax.stop_gradient(z)
+    fixed = jax.lax.stop_gradient((torque, gaps, arms, linear, hertz))
+    t, _, m, c, h = fixed
+    # above the root: the binding pair alone carrying the whole torque on the shortest arm
+    # (Newton on a convex increasing function converges monotonically from there)
+    m_min = jnp.min(m, axis=-1)
+    load = t / m_min
+    theta = lowest + (jnp.max(c, axis=-1) * load + jnp.max(h, axis=-1) * jnp.cbrt(load) ** 2) / m_min
+    theta, _ = jax.lax.scan(lambda th, _: (newton(th, *fixed), None), theta, None, length=APPROACH_STEPS)
+    theta = jax.lax.stop_gradient(theta)
     # one Newton step on the traced inputs: the implicit function's derivative at the root
-    slope = _total_slope(z, gaps, linear, hertz)
-    return z - residual(z, load, gaps, linear, hertz) / jnp.where(slope > 0.0, slope, 1.0)
+    value, slope = _residual_and_slope(theta, torque, gaps, arms, linear, hertz)
+    return theta - value / jnp.where(slope > 0.0, slope, 1.0)
 
 
-def share_load(load: ArrayLike, gaps: ArrayLike, linear: ArrayLike, hertz: ArrayLike) -> tuple[Array, Float[Array, "..."]]:
-    """`shared_approach` and the pairs' loads $F_k$ (N) there (they sum to $P$)."""
-    approach = shared_approach(load, gaps, linear, hertz)
-    return approach, pair_loads(approach[..., None], gaps, linear, hertz)
+def share_load(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear: ArrayLike,
+               hertz: ArrayLike) -> tuple[Array, Float[Array, "..."]]:
+    r"""`shared_rotation` and the pairs' loads $F_k$ (N) there ($\sum_k m_kF_k = T$)."""
+    rotation = shared_rotation(torque, gaps, arms, linear, hertz)
+    return rotation, pair_loads(rotation[..., None], gaps, arms, linear, hertz)
