@@ -106,7 +106,7 @@ def test_gradient_through_resolve_matches_finite_difference():
 def test_scene_checks_declared_stages():
     pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
     assert pair.supported_effects == frozenset()
-    with pytest.raises(ValueError, match="not available for DoubleArcGearPair.*four_state.*four-state"):
+    with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state.*four-state"):
         gj.Scene(pair, effects=("ltca",), operating=gj.OperatingPoint(torque=1.0e5))
     # the stage itself reads the same declaration (it refuses before using its other inputs)
     with pytest.raises(ValueError, match="DoubleArcGearPair supports the rigid TCA only"):

@@ -1,0 +1,238 @@
+r"""Loaded contact of a double-circular-arc pair: each tooth pair of each contact zone
+touches at one point, which the TCA finds (`gearjax.tca`), and carries its share of the
+torque through its teeth's compliance and a Hertz point contact (`point_contact`).
+
+Per position and tooth pair (both zones), at the pair's closest slice contact of the TCA:
+
+* the rigid gap $e_k$ (the TCA's separation, mm) and the arm $m_k = r_{a2}|n_t|$ (mm per
+  radian of the gear's lag, the TCA's own conversion);
+* the Hertz coefficient $h_k$ from the two flanks' relative curvatures at the contact
+  (`hertz_point.relative_curvatures` on `flank_point`, `hertz_point_contact`);
+* the linear compliance $c_k$: each tooth's section compliance (`section_compliance`, the
+  tooth's generated transverse profile as the section, the load at the contact point along
+  the transverse part of the normal), spread along the face with the decay length
+  $\lambda$ (`point_load_compliance`), made normal by $|n_t|^2$, the two teeth summed. No
+  fillet-foundation term, no coupling between the teeth of different pairs. Edge contacts
+  (a tip edge or a face end on a flank) are taken with the flanks' curvatures, floored at
+  `MIN_CURVATURE`: the edge's own rounding is not modelled.
+
+The lag $\Theta$ and the loads then come from `point_contact.share_load` on the gear's
+torque $T_2 = T_1 z_2/z_1$; the loaded TE is the TCA's less $\Theta$, as for the involute
+families.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._custom_types import Array, ArrayLike, Float
+from ..tca import TCAResult
+from ..units import Material
+from .hertz_point import effective_modulus, hertz_point_contact, relative_curvatures
+from .point_contact import point_load_compliance, section_compliance, share_load
+
+#: Samples of the section between the root circle and the load point.
+SECTION_SAMPLES = 200
+#: Floor of the relative curvatures $A$, $B$ (mm⁻¹): an edge contact's flank curvatures can
+#: vanish or change sign; the floor is a relative radius of 50 m.
+MIN_CURVATURE = 1e-5
+
+
+class ToothSection(eqx.Module):
+    """A tooth's half thickness against radius, from its generated transverse profile.
+
+    Attributes:
+        radius: radii of the samples (mm), increasing from the root circle to the tip.
+        half_thickness: chordal half thickness $r|\\sin\\theta|$ there (mm).
+    """
+
+    radius: Float[Array, " sample"]
+    half_thickness: Float[Array, " sample"]
+
+    @classmethod
+    def of(cls, pair, gear: int, samples: int = 80) -> ToothSection:
+        """The section of `gear` of a concrete `DoubleArcGearPair` (its `tooth_profile`)."""
+        profile = np.asarray(pair.tooth_profile(gear, samples))
+        radius = np.hypot(profile[:, 0], profile[:, 1])
+        half = radius * np.abs(np.sin(np.arctan2(profile[:, 1], profile[:, 0])))
+        order = np.argsort(radius)
+        radius, half = radius[order], half[order]
+        keep = np.concatenate([[True], np.diff(radius) > 1e-9])
+        return cls(jnp.asarray(radius[keep]), jnp.asarray(half[keep]))
+
+    def compliance(self, point: ArrayLike, normal: ArrayLike, youngs_modulus, poisson_ratio) -> Array:
+        """Transverse section compliance (mm²/N per unit face width) for a load at the
+        profile `point` (tooth frame, mm) along the unit transverse `normal`."""
+        radius = jnp.linalg.norm(point)
+        radial = point / radius
+        tangential = jnp.stack([-radial[1], radial[0]])
+        cos = jnp.abs(jnp.dot(normal, tangential))
+        sin = jnp.abs(jnp.dot(normal, radial))
+        angle = jnp.arctan2(sin, cos)
+        x = jnp.linspace(self.radius[0], radius, SECTION_SAMPLES)
+        h = jnp.interp(x, self.radius, self.half_thickness)
+        return section_compliance(x, h, jnp.abs(jnp.dot(point, tangential)), angle, youngs_modulus, poisson_ratio)
+
+
+class PointContactLoads(eqx.Module):
+    """The loaded point contacts over a mesh cycle. Axes: position, pair (both zones, as
+    the TCA's pair axis).
+
+    Attributes:
+        rotation: the gear's lag $\\Theta$ (rad), shape (pos,).
+        transmission_error: loaded TE of gear 2, the TCA's less $\\Theta$ (rad).
+        loads: normal load of each pair (N).
+        stiffness: $dF_k/d\\delta_k$ of each pair (N/mm; 0 out of contact).
+        mesh_stiffness: $dT_2/d\\Theta$ (N·mm/rad), shape (pos,).
+        semi_major, semi_minor: contact ellipse semi-axes (mm).
+        max_pressure: $p_0$ (MPa).
+        linear_compliance: $c_k$ (mm/N); hertz_coefficient: $h_k$ (mm/N^(2/3)).
+        gaps: rigid gaps $e_k$ (mm); arms: $m_k$ (mm).
+        slice_index: the TCA slice of each pair's contact.
+    """
+
+    rotation: Float[Array, " pos"]
+    transmission_error: Float[Array, " pos"]
+    loads: Float[Array, "pos pair"]
+    stiffness: Float[Array, "pos pair"]
+    mesh_stiffness: Float[Array, " pos"]
+    semi_major: Float[Array, "pos pair"]
+    semi_minor: Float[Array, "pos pair"]
+    max_pressure: Float[Array, "pos pair"]
+    linear_compliance: Float[Array, "pos pair"]
+    hertz_coefficient: Float[Array, "pos pair"]
+    gaps: Float[Array, "pos pair"]
+    arms: Float[Array, "pos pair"]
+    slice_index: Array
+
+
+def _tooth_frame_normal(zone, gear, u):
+    """Profile point and unit normal of `gear`'s flank at `u`, tooth frame (tooth on +x)."""
+    point, tangent = jax.jvp(lambda t: zone.profile(gear, t), (u,), (jnp.ones_like(u),))
+    normal = jnp.stack([-tangent[1], tangent[0]])
+    return point, normal / jnp.linalg.norm(normal)
+
+
+def _contact_coefficients(zone, sections, k, phi1, u1, u2, z, te, normal, frac, material, decay_length):
+    """(Hertz coefficient, linear compliance) of one contact of `zone`'s pair `k`."""
+    rot1 = phi1 - k * zone.angular_pitch(0)
+    rot2 = phi1 / zone.gear_ratio - k * zone.angular_pitch(1) + te
+    surface1 = lambda u, zz: zone.flank_point(0, u, zz, rot1)  # noqa: E731
+    surface2 = lambda u, zz: zone.flank_point(1, u, zz, rot2)  # noqa: E731
+    a_curv, b_curv, _ = relative_curvatures(surface1, jnp.stack([u1, z]), surface2, jnp.stack([u2, z]), normal)
+    # an edge contact (a tip edge or face end on a flank) has no common tangent plane: its
+    # curvatures, taken on the flanks, are floored at a flat contact's
+    a_curv, b_curv = jnp.maximum(a_curv, MIN_CURVATURE), jnp.maximum(b_curv, MIN_CURVATURE)
+    modulus = effective_modulus(material.youngs_modulus, material.poisson_ratio)
+    hertz = hertz_point_contact(1.0, a_curv, b_curv, modulus).approach_coefficient
+    linear = 0.0
+    for gear, u in ((0, u1), (1, u2)):
+        point, n2 = _tooth_frame_normal(zone, gear, u)
+        section = sections[gear].compliance(point, n2, material.youngs_modulus, material.poisson_ratio)
+        linear = linear + frac**2 * point_load_compliance(section, decay_length)
+    return hertz, linear, a_curv, b_curv
+
+
+def closest_contact(tca: TCAResult) -> dict[str, Array]:
+    """Each pair's point contact, (pos, pair): between the TCA's face slices, where the
+    parabola through the largest slice TE and its neighbours peaks (a face-end contact where
+    that is larger). Returns the nearest slice `slice`, the rigid normal gap `gap` (mm, from
+    the largest of the pairs' peaks; `inf` out of mesh), the profile parameters `u1`, `u2`
+    and axial position `z` (mm, interpolated), the peak TE `te` (rad) and `frac` ($|n_t|$)."""
+    n_mid = tca.slice_z.shape[-1] - 2
+    te = jnp.where(tca.valid, tca.slice_te, -jnp.inf)
+    mid = te[..., :n_mid]
+    best = jnp.argmax(mid, axis=-1)
+    centre = jnp.clip(best, 1, n_mid - 2)
+    pick = lambda x, k: jnp.take_along_axis(x, k[..., None], axis=-1)[..., 0]  # noqa: E731
+    left, here, right = pick(mid, centre - 1), pick(mid, centre), pick(mid, centre + 1)
+    curvature = left - 2.0 * here + right
+    ok = (best == centre) & jnp.isfinite(left) & jnp.isfinite(right) & (curvature < 0.0)
+    safe = jnp.where(ok, curvature, -1.0)
+    x = jnp.where(ok, jnp.clip(-(right - left) / (2.0 * safe), -1.0, 1.0), 0.0)
+    peak = jnp.where(ok, here + 0.5 * x * (right - left) + 0.5 * x * x * safe, pick(mid, best))
+    ends = jnp.max(te[..., n_mid:], axis=-1)
+    at_end = ends > peak
+    slice_index = jnp.where(at_end, n_mid + jnp.argmax(te[..., n_mid:], axis=-1), best)
+    neighbour = jnp.where(x >= 0.0, centre + 1, centre - 1)
+    weight = jnp.where(at_end, 0.0, jnp.abs(x))
+    start = jnp.where(at_end, slice_index, centre)
+    other = jnp.where(at_end, slice_index, neighbour)
+
+    def interpolate(field):
+        return (1.0 - weight) * pick(field, start) + weight * pick(field, other)
+
+    peak = jnp.maximum(peak, ends)
+    frac = pick(tca.transverse_normal_fraction, slice_index)
+    finite = jnp.isfinite(peak)
+    top = jnp.max(peak, axis=-1, keepdims=True)
+    gap = jnp.where(finite, (top - jnp.where(finite, peak, 0.0)) * tca.action_radius[1] * frac, jnp.inf)
+    z = (1.0 - weight) * tca.slice_z[start] + weight * tca.slice_z[other]
+    return {"slice": slice_index, "gap": gap, "u1": interpolate(tca.pinion_parameter),
+            "u2": interpolate(tca.gear_parameter), "z": z, "te": jnp.where(finite, peak, 0.0), "frac": frac}
+
+
+def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material = Material(),
+                           coupling_length_mn: float = 1.1,
+                           sections: tuple[ToothSection, ToothSection] | None = None) -> PointContactLoads:
+    """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
+
+    Args:
+        pair: the concrete, resolved pair (its tooth sections are sampled on the host).
+        tca: its `tooth_contact_analysis`.
+        torque: pinion torque $T_1$ (N·mm).
+        material: both gears'.
+        coupling_length_mn: the decay length $\\lambda$ of a point load along the face, in
+            $m_n$ (as `SliceCompliance`).
+        sections: the two teeth's `ToothSection`s; sampled from the concrete pair if
+            None (give them to call this inside `jit`).
+
+    Returns:
+        `PointContactLoads`.
+    """
+    zones = pair.contact_zones()
+    if sections is None:
+        sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
+    decay_length = coupling_length_mn * pair.normal_module
+    contact = closest_contact(tca)
+    j, gaps, u1, u2, z, te, frac = (contact[name] for name in ("slice", "gap", "u1", "u2", "z", "te", "frac"))
+    normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
+    phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
+    k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
+    per_zone = []
+    for zone in zones:
+        per_zone.append(jnp.vectorize(
+            lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
+            signature="(),(),(),(),(),(),(3),()->(4)",
+        )(k, phi1, u1, u2, z, te, normal, frac))
+    coefficients = jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
+    finite = jnp.isfinite(gaps)
+    # pairs out of mesh have no contact: unit coefficients keep their (zero) loads finite
+    coefficients = jnp.where(finite[..., None], coefficients, 1.0)
+    hertz, linear = coefficients[..., 0], coefficients[..., 1]
+    arms = tca.action_radius[1] * jnp.where(finite, frac, 1.0)
+    gear_torque = torque * pair.teeth[1] / pair.teeth[0]
+    rotation, loads = share_load(gear_torque, gaps, arms, linear, hertz)
+    cube = jnp.cbrt(loads)
+    safe = jnp.where(cube > 0.0, cube, 1.0)
+    stiffness = jnp.where(cube > 0.0, safe / (linear * safe + 2.0 / 3.0 * hertz), 0.0)
+    modulus = effective_modulus(material.youngs_modulus, material.poisson_ratio)
+    contact = hertz_point_contact(loads, coefficients[..., 2], coefficients[..., 3], modulus)
+    return PointContactLoads(
+        rotation=rotation,
+        transmission_error=tca.transmission_error - rotation,
+        loads=loads,
+        stiffness=stiffness,
+        mesh_stiffness=jnp.sum(arms**2 * stiffness, axis=-1),
+        semi_major=contact.semi_major,
+        semi_minor=contact.semi_minor,
+        max_pressure=contact.max_pressure,
+        linear_compliance=linear,
+        hertz_coefficient=hertz,
+        gaps=gaps,
+        arms=arms,
+        slice_index=j,
+    )

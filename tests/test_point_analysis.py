@@ -1,0 +1,87 @@
+"""Loaded point contact of the double-circular-arc seed pair (`gearjax.ltca.point_analysis`)
+on the rigid TCA of `test_hard_cases_double_arc.py`'s program (the same scene structure:
+the persistent test cache shares it): the torque is carried, zero torque is the rigid TE,
+the mesh stiffness is the derivative of the torque, and the tooth sections and contact
+ellipses are those of the seed's teeth."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import gearjax as gj
+from gearjax.ltca.point_analysis import ToothSection, point_contact_analysis
+from gearjax.papers.double_arc import SEED_CASE
+
+WINDOW = (-2, -1, 0, 1, 2, 3)  # test_hard_cases_double_arc.py's
+TORQUE = 1.0e5  # N·mm, the seed's 100 N·m
+
+
+@pytest.fixture(scope="module")
+def seed():
+    pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
+                                SEED_CASE["face_width"], 0.0)
+    tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy="fast"), throw=False).tca
+    resolved = pair.resolve()
+    sections = (ToothSection.of(resolved, 0), ToothSection.of(resolved, 1))
+    analysis = eqx.filter_jit(point_contact_analysis)
+
+    def loaded(torque):
+        return analysis(resolved, tca, jnp.asarray(torque, float), sections=sections)
+
+    return resolved, tca, loaded
+
+
+def test_the_pairs_carry_the_torque_at_every_position(seed):
+    pair, _, loaded = seed
+    result = loaded(TORQUE)
+    gear_torque = TORQUE * pair.teeth[1] / pair.teeth[0]
+    np.testing.assert_allclose(jnp.sum(result.arms * result.loads, axis=-1), gear_torque, rtol=1e-9)
+    assert bool(jnp.all(jnp.isfinite(result.rotation))) and bool(jnp.all(result.rotation > 0.0))
+    assert bool(jnp.all(result.loads >= 0.0))
+
+
+def test_zero_torque_is_the_rigid_transmission_error(seed):
+    _, tca, loaded = seed
+    result = loaded(0.0)
+    assert float(jnp.max(result.loads)) == 0.0
+    # the binding pair's gap is the TCA's own zero, to its solver tolerance
+    np.testing.assert_allclose(result.transmission_error, tca.transmission_error, atol=1e-9)
+
+
+def test_the_mesh_stiffness_is_the_derivative_of_the_torque(seed):
+    """dT2/dΘ of the result against a central difference of two solves (the same program)."""
+    pair, _, loaded = seed
+    ratio = pair.teeth[1] / pair.teeth[0]
+    step = 1e-3 * TORQUE
+    plus, minus, mid = loaded(TORQUE + step), loaded(TORQUE - step), loaded(TORQUE)
+    fd = 2 * step * ratio / (plus.rotation - minus.rotation)
+    np.testing.assert_allclose(mid.mesh_stiffness, fd, rtol=1e-4)
+
+
+def test_the_contact_ellipse_is_hertzs_for_the_pairs_load(seed):
+    """Each loaded pair's ellipse and pressure are the Hertz contact of its own load: the
+    approach c F + h F^(2/3) equals its share of the lag, and p0 = 3F/(2πab)."""
+    _, _, loaded = seed
+    result = loaded(TORQUE)
+    loads = np.asarray(result.loads)
+    on = loads > 0
+    closing = result.linear_compliance * result.loads + result.hertz_coefficient * result.loads ** (2 / 3)
+    np.testing.assert_allclose(np.asarray(closing)[on], np.asarray(result.arms * result.rotation[:, None]
+                                                                     - result.gaps)[on], rtol=1e-8)
+    p0 = 3 * loads[on] / (2 * np.pi * np.asarray(result.semi_major)[on] * np.asarray(result.semi_minor)[on])
+    np.testing.assert_allclose(np.asarray(result.max_pressure)[on], p0, rtol=1e-10)
+    # the seed's teeth are nearly conformal across the profile: an ellipse long along the face
+    assert (np.asarray(result.semi_major)[on] > 3 * np.asarray(result.semi_minor)[on]).all()
+
+
+def test_the_tooth_section_runs_from_the_root_circle_to_the_tip(seed):
+    pair, _, _ = seed
+    for gear in (0, 1):
+        section = ToothSection.of(pair, gear)
+        radius = np.asarray(section.radius)
+        assert radius[0] == pytest.approx(float(pair.root_radius[gear]), abs=1e-6)
+        assert radius[-1] >= float(pair.tip_radius[gear]) - 1e-6
+        assert (np.diff(radius) > 0).all() and (np.asarray(section.half_thickness) > 0).all()
