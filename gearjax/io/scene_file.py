@@ -18,7 +18,7 @@ from ..geometry.modification import FlankModification
 from ..ltca import COMPLIANCE_MODELS
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from ..units import Material
-from .scene_keys import check_declared, field_message
+from .scene_keys import check_declared, field_message, toml_value
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -214,7 +214,7 @@ def pair_reference() -> str:
                 else:
                     value = [v / factor for v in default] if isinstance(default, tuple) else default
                     value = value / factor if isinstance(value, float) else value
-                    cells.append(f"default `{_toml(value)}`")
+                    cells.append(f"default `{toml_value(value)}`")
             elif key in spec.fixed[0]:
                 cells.append("fixed")
             else:
@@ -223,15 +223,6 @@ def pair_reference() -> str:
     notes = [f"`{spec.family}`: {', '.join(f'`{k}`' for k in spec.fixed[0])}, {spec.fixed[1]}." for spec in specs
              if spec.fixed[0]]
     return "\n".join(rows) + ("\n\nFixed: " + " ".join(notes) if notes else "") + "\n"
-
-
-def _toml(value) -> str:
-    """A default as it is written in a scene file."""
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
-    return repr(value)
 
 
 def _pair_keys() -> set:

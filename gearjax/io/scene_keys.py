@@ -66,7 +66,7 @@ class SceneKey:
         return "; ".join(parts)
 
     def default_text(self) -> str:
-        return f"`{_toml(self.default)}`" if self.default is not None else self.absent
+        return f"`{toml_value(self.default)}`" if self.default is not None else self.absent
 
 
 def _range(bounds: tuple[float, float, bool, bool]) -> str:
@@ -81,14 +81,14 @@ def _num(value: float) -> str:
     return "∞" if value == _INF else "−∞" if value == -_INF else f"{value:g}"
 
 
-def _toml(value) -> str:
+def toml_value(value) -> str:
     """A value as it is written in a scene file."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
         return f'"{value}"'
     if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
     return repr(value)
 
 
