@@ -25,11 +25,10 @@ def seed():
                                 SEED_CASE["face_width"], 0.0)
     tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy="fast"), throw=False).tca
     resolved = pair.resolve()
-    sections = (ToothSection.of(resolved, 0), ToothSection.of(resolved, 1))
-    analysis = eqx.filter_jit(point_contact_analysis)
+    analysis = eqx.filter_jit(point_contact_analysis)  # the pair traced, its sections too
 
     def loaded(torque):
-        return analysis(resolved, tca, jnp.asarray(torque, float), sections=sections)
+        return analysis(resolved, tca, jnp.asarray(torque, float))
 
     return resolved, tca, loaded
 
@@ -84,4 +83,4 @@ def test_the_tooth_section_runs_from_the_root_circle_to_the_tip(seed):
         radius = np.asarray(section.radius)
         assert radius[0] == pytest.approx(float(pair.root_radius[gear]), abs=1e-6)
         assert radius[-1] >= float(pair.tip_radius[gear]) - 1e-6
-        assert (np.diff(radius) > 0).all() and (np.asarray(section.half_thickness) > 0).all()
+        assert (np.diff(radius) >= 0).all() and (np.asarray(section.half_thickness) > 0).all()

@@ -245,11 +245,13 @@ class DoubleArcGearPair(AbstractGearPair):
         return self.pitch_radius[..., gear] * jnp.cos(self.transverse_pressure_angle)
 
     # ------------------------------------------------------------------ drawings
-    def tooth_profile(self, gear: int, samples: int = 40) -> np.ndarray:
+    def tooth_profile(self, gear: int, samples: int = 40) -> Float[Array, "n 2"]:
         """Transverse drive-flank profile of one tooth of `gear` from tip to root, all four
-        rack arcs generated (gear frame, tooth on +x, mm), for drawings."""
-        m = float(self.normal_module)
-        flank = self.rack.flank(samples)[1:] * m  # without the tip-land point
+        rack arcs generated (gear frame, tooth on +x, mm): for drawings and for the tooth's
+        section in the loaded contact (`gearjax.ltca.point_analysis`). Traceable: the rack's
+        polar angles do not depend on the module."""
+        m = self.normal_module
+        flank = self.rack.flank(samples)[1:]  # without the tip-land point, multiples of m_n
         out = []
         segments = [
             (self.rack.convex_centre, self.rack.convex_radius, slice(0, samples)),
@@ -259,10 +261,9 @@ class DoubleArcGearPair(AbstractGearPair):
         ]
         for centre, radius, part in segments:
             pts = flank[part]
-            c = np.array(centre) * m
-            theta = np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0])
+            theta = np.arctan2(pts[:, 1] - centre[1], pts[:, 0] - centre[0])
             theta = np.where(np.abs(np.sin(theta)) < 1e-9, theta + 1e-9, theta)
-            point, _ = generated_point(tuple(c), radius * m, jnp.asarray(theta), self.pitch_radius[gear], self.helix_angle)
-            out.append(np.asarray(point))
-        return np.concatenate(out)
-
+            point, _ = generated_point((m * centre[0], m * centre[1]), radius * m, jnp.asarray(theta),
+                                       self.pitch_radius[..., gear], self.helix_angle)
+            out.append(point)
+        return jnp.concatenate(out)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from .._custom_types import Array, ArrayLike, Float
 from ..tca import TCAResult
@@ -54,14 +53,12 @@ class ToothSection(eqx.Module):
 
     @classmethod
     def of(cls, pair, gear: int, samples: int = 80) -> ToothSection:
-        """The section of `gear` of a concrete `DoubleArcGearPair` (its `tooth_profile`)."""
-        profile = np.asarray(pair.tooth_profile(gear, samples))
-        radius = np.hypot(profile[:, 0], profile[:, 1])
-        half = radius * np.abs(np.sin(np.arctan2(profile[:, 1], profile[:, 0])))
-        order = np.argsort(radius)
-        radius, half = radius[order], half[order]
-        keep = np.concatenate([[True], np.diff(radius) > 1e-9])
-        return cls(jnp.asarray(radius[keep]), jnp.asarray(half[keep]))
+        """The section of `gear` of a `DoubleArcGearPair` (its `tooth_profile`, root to tip;
+        traceable)."""
+        profile = pair.tooth_profile(gear, samples)[::-1]
+        radius = jnp.hypot(profile[:, 0], profile[:, 1])
+        half = radius * jnp.abs(jnp.sin(jnp.arctan2(profile[:, 1], profile[:, 0])))
+        return cls(jax.lax.cummax(radius), half)  # increasing, as the interpolation needs
 
     def compliance(self, point: ArrayLike, normal: ArrayLike, youngs_modulus, poisson_ratio) -> Array:
         """Transverse section compliance (mm²/N per unit face width) for a load at the
@@ -181,14 +178,13 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
 
     Args:
-        pair: the concrete, resolved pair (its tooth sections are sampled on the host).
+        pair: the resolved pair.
         tca: its `tooth_contact_analysis`.
         torque: pinion torque $T_1$ (N·mm).
         material: both gears'.
         coupling_length_mn: the decay length $\\lambda$ of a point load along the face, in
             $m_n$ (as `SliceCompliance`).
-        sections: the two teeth's `ToothSection`s; sampled from the concrete pair if
-            None (give them to call this inside `jit`).
+        sections: the two teeth's `ToothSection`s; sampled from the pair if None.
 
     Returns:
         `PointContactLoads`.
