@@ -134,3 +134,15 @@ def test_gradients_match_finite_differences():
         np.testing.assert_allclose(grad, fd, rtol=1e-6)
     fd = (ellipse_ratio(5.0 + 1e-6) - ellipse_ratio(5.0 - 1e-6)) / 2e-6
     np.testing.assert_allclose(jax.grad(ellipse_ratio)(5.0), fd, rtol=1e-6)
+
+
+def test_the_gradient_is_finite_at_a_circular_contact():
+    """A = B (sphere on a plane) is where the eigenvalues meet: the derivative of the approach
+    with respect to the radius is the closed form's, dδ/dR = −δ/(3R)."""
+    def approach(radius):
+        a_curv, b_curv, _ = relative_curvatures(_sphere(radius), [0.0, 0.0], _plane, [0.0, 0.0], [0.0, 0.0, 1.0])
+        return hertz_point_contact(LOAD, a_curv, b_curv, E_STAR).approach
+
+    grad = jax.grad(approach)(10.0)
+    _, delta, _ = _circle(LOAD, 10.0, E_STAR)
+    np.testing.assert_allclose(grad, -delta / 30.0, rtol=1e-8)

@@ -20,11 +20,19 @@ _TITLE = re.compile(r"^# (.+)$", re.M)
 
 def cli_page() -> str:
     """The `--help` of `gearjax` and of each sub-command, at 100 columns."""
-    os.environ["COLUMNS"] = "100"  # argparse wraps at $COLUMNS
     from gearjax.cli import COMMANDS, build_parser
 
-    parser, _ = build_parser()
-    subparsers = next(a for a in parser._actions if a.dest == "command").choices
+    previous = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # argparse wraps at $COLUMNS when it formats
+    try:
+        parser, _ = build_parser()
+        subparsers = next(a for a in parser._actions if a.dest == "command").choices
+        helps = [parser.format_help()] + [subparsers[name].format_help() for name in COMMANDS]
+    finally:
+        if previous is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = previous
     parts = [
         "# Command line\n",
         "*Generated from the parser (`gearjax.cli.build_parser`) when the site is built.*\n",
@@ -34,11 +42,11 @@ def cli_page() -> str:
         "a finished run exits with 0. Compiled programs are cached on disk "
         "(`$GEARJAX_CACHE_DIR`, default `~/.cache/gearjax/jax`), so a second run of the same scene "
         "structure starts in seconds.\n",
-        "```text\n" + parser.format_help().rstrip() + "\n```\n",
+        "```text\n" + helps[0].rstrip() + "\n```\n",
     ]
-    for name in COMMANDS:
+    for name, text in zip(COMMANDS, helps[1:]):
         parts.append(f"## `gearjax {name}`\n")
-        parts.append("```text\n" + subparsers[name].format_help().rstrip() + "\n```\n")
+        parts.append("```text\n" + text.rstrip() + "\n```\n")
     return "\n".join(parts)
 
 
@@ -50,12 +58,12 @@ def _title(path: Path) -> str:
 def gallery_page(notebook_figures: dict[str, list[str]]) -> str:
     """Every documentation figure, with the pages that show it, and every notebook figure
     (`notebook_figures`: notebook page -> its figure files), with its notebook."""
-    pages = sorted(DOCS.glob("*.md"))
+    pages = sorted(DOCS.rglob("*.md"))
     parts = ["# Gallery\n", "*Every figure of the documentation and of the notebooks, generated when the site is "
              "built; each links to the page that explains it (and states its accuracy).*\n"]
     for figure in sorted((DOCS / "figures").glob("*.png")):
         shown = [p for p in pages if f"figures/{figure.name}" in p.read_text(encoding="utf-8")]
-        links = ", ".join(f"[{_title(p)}]({p.name})" for p in shown) or "not shown on a page"
+        links = ", ".join(f"[{_title(p)}]({p.relative_to(DOCS).as_posix()})" for p in shown) or "not shown on a page"
         parts.append(f"### {figure.stem.replace('_', ' ')}\n\n![{figure.stem}](figures/{figure.name})\n\nShown in: {links}.\n")
     for page, figures in notebook_figures.items():
         notebook = NOTEBOOKS / f"{Path(page).stem}.ipynb"

@@ -1,8 +1,9 @@
 """TOML scene files and the built-in default scene.
 
 Field names carry their unit where it differs from the engine's (mm, N, s, rad):
-`helix_angle_deg`, `torque_Nm`, `speed_rpm`, `tip_relief_um`. The format, one example per
-section, is documented in the README. Errors name the offending field as `section.key`.
+`helix_angle_deg`, `torque_Nm`, `speed_rpm`, `tip_relief_um`. The format and every key:
+`docs/scene_files.md` (the keys' declarations: `scene_keys`). Errors are one line naming the
+field as `[section] key: ...`.
 """
 
 from __future__ import annotations

@@ -110,7 +110,7 @@ def _modification(whose: str) -> tuple[SceneKey, ...]:
                  allowed="within the active flank"),
         SceneKey("crowning_um", "µm", 0.0, "y5: lead crowning at the face ends", _AMOUNT),
         SceneKey("unmodified_length", "mm", 0.0, "y6: face width left uncrowned", _NON_NEGATIVE,
-                 allowed="at most the face width"),
+                 allowed="less than the face width"),
     )
 
 
@@ -149,15 +149,15 @@ def _optimize_keys() -> tuple[SceneKey, ...]:
         SceneKey("loads_Nm", "N·m", None, "pinion torques of the load spectrum", (0.0, _INF, False, True),
                  absent="the scene's torque", allowed="a non-empty list"),
         SceneKey("load_weights", "", None, "weights of the loads", _NON_NEGATIVE, absent="equal",
-                 allowed="one per load"),
+                 allowed="one per load, with a positive sum"),
         SceneKey("aggregate", "", d["aggregate"], "over the loads: weighted mean or maximum", choices=AGGREGATES),
         count("error_samples", 0, "sampled mesh errors per design (0: the scene's own errors)"),
         weight("misalignment_um", "µm", "tolerance of f_ma: samples drawn from U(−t, t)"),
         weight("base_pitch_deviation_um", "µm", "tolerance of f_pb"),
         SceneKey("max_pressure_MPa", "MPa", None, "limit of the largest Hertz pressure (penalised beyond)",
-                 _NON_NEGATIVE, absent="no limit"),
+                 _POSITIVE, absent="no limit"),
         weight("pressure_penalty", "", "weight of the pressure penalty, in the objective's unit"),
-        SceneKey("max_lte_um", "µm", None, "limit of the loaded TE peak-to-peak (penalised beyond)", _NON_NEGATIVE,
+        SceneKey("max_lte_um", "µm", None, "limit of the loaded TE peak-to-peak (penalised beyond)", _POSITIVE,
                  absent="no limit"),
         weight("lte_penalty", "", "weight of the loaded-TE penalty, in the objective's unit"),
         SceneKey("accuracy", "", None, "accuracy preset of the search", choices=_PRESETS,
@@ -169,7 +169,8 @@ def _optimize_keys() -> tuple[SceneKey, ...]:
         count("generations", 1, "GA generations"),
         count("starts", 1, "gradient: Latin-hypercube starts"),
         count("iterations", 1, "gradient: Adam iterations per start"),
-        weight("learning_rate", "", "gradient: Adam's learning rate, in the unit cube of the bounds"),
+        SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
+                 (0.0, 1.0, False, True)),
         count("seed", 0, "random seed of the search and of the error samples"),
     ]
     scales = ("m_n",) * 5 + ("b",)
@@ -246,7 +247,7 @@ def check_declared(section: str, table: dict) -> None:
             raise ValueError(f"[{section}] {name}: must be in {_range(key.bounds)}{unit}; got {shown}{unit}")
 
 
-_FIELD = re.compile(r"^(?P<fields>[a-z_]+(?:\.[a-z_]+)?(?:\[\d\])?(?: \([^)]*\))?(?: / [a-z_]+)*)(?:=| )(?P<rest>.*)$", re.S)
+_FIELD = re.compile(r"^(?P<fields>[A-Za-z_]+(?:\.[A-Za-z_]+)?(?:\[\d\])?(?: \([^)]*\))?(?: / [A-Za-z_]+)*)(?:=| )(?P<rest>.*)$", re.S)
 
 
 def field_message(section: str, message: str, fields: dict[str, tuple[str, str]]) -> str:
@@ -259,7 +260,7 @@ def field_message(section: str, message: str, fields: dict[str, tuple[str, str]]
     if message.startswith("["):
         return message
     match = _FIELD.match(message)
-    head = re.match(r"[a-z_.]+", match["fields"])[0] if match else ""
+    head = re.match(r"[A-Za-z_.]+", match["fields"])[0] if match else ""
     if head not in fields and "." in head:  # `modification.tip_relief_length`: a section's own key
         prefix, name = head.split(".", 1)
         fields = {head: (prefix, fields.get(name, (prefix, name))[1])}

@@ -181,9 +181,12 @@ def relative_curvatures(surface_1, parameters_1: ArrayLike, surface_2, parameter
 
     half = 0.5 * (height_form(surface_2, parameters_2) - height_form(surface_1, parameters_1))
     mean = 0.5 * (half[0, 0] + half[1, 1])
-    radius = jnp.sqrt(0.25 * (half[0, 0] - half[1, 1]) ** 2 + half[0, 1] ** 2)
+    diff, off = half[0, 0] - half[1, 1], half[0, 1]
+    squared = 0.25 * diff**2 + off**2
+    round_ = squared <= 0.0  # a circle: every direction is principal (guarded for gradients)
+    radius = jnp.where(round_, 0.0, jnp.sqrt(jnp.where(round_, 1.0, squared)))
     small, large = mean - radius, mean + radius
     # eigenvector of the smaller eigenvalue
-    angle = 0.5 * jnp.arctan2(2.0 * half[0, 1], half[0, 0] - half[1, 1]) + 0.5 * jnp.pi
+    angle = 0.5 * jnp.arctan2(jnp.where(round_, 0.0, 2.0 * off), jnp.where(round_, 1.0, diff)) + 0.5 * jnp.pi
     direction = basis @ jnp.stack([jnp.cos(angle), jnp.sin(angle)])
     return small, large, direction

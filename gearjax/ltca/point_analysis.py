@@ -41,14 +41,16 @@ MIN_CURVATURE = 1e-5
 
 
 class ToothSection(eqx.Module):
-    """A tooth's half thickness against radius, from its generated transverse profile.
+    """A tooth as a cantilever along its centre line (the tooth frame's $x$ axis): the
+    half thickness against $x$, from its generated transverse profile.
 
     Attributes:
-        radius: radii of the samples (mm), increasing from the root circle to the tip.
-        half_thickness: chordal half thickness $r|\\sin\\theta|$ there (mm).
+        x: positions on the centre line (mm), non-decreasing from the root (the tooth space's
+            centre on the root circle) to the tip.
+        half_thickness: the profile's distance $|y|$ from the centre line there (mm).
     """
 
-    radius: Float[Array, " sample"]
+    x: Float[Array, " sample"]
     half_thickness: Float[Array, " sample"]
 
     @classmethod
@@ -56,22 +58,17 @@ class ToothSection(eqx.Module):
         """The section of `gear` of a `DoubleArcGearPair` (its `tooth_profile`, root to tip;
         traceable)."""
         profile = pair.tooth_profile(gear, samples)[::-1]
-        radius = jnp.hypot(profile[:, 0], profile[:, 1])
-        half = radius * jnp.abs(jnp.sin(jnp.arctan2(profile[:, 1], profile[:, 0])))
-        return cls(jax.lax.cummax(radius), half)  # increasing, as the interpolation needs
+        return cls(jax.lax.cummax(profile[:, 0]), jnp.abs(profile[:, 1]))  # x increasing, as interpolation needs
 
     def compliance(self, point: ArrayLike, normal: ArrayLike, youngs_modulus, poisson_ratio) -> Array:
         """Transverse section compliance (mm²/N per unit face width) for a load at the
-        profile `point` (tooth frame, mm) along the unit transverse `normal`."""
-        radius = jnp.linalg.norm(point)
-        radial = point / radius
-        tangential = jnp.stack([-radial[1], radial[0]])
-        cos = jnp.abs(jnp.dot(normal, tangential))
-        sin = jnp.abs(jnp.dot(normal, radial))
-        angle = jnp.arctan2(sin, cos)
-        x = jnp.linspace(self.radius[0], radius, SECTION_SAMPLES)
-        h = jnp.interp(x, self.radius, self.half_thickness)
-        return section_compliance(x, h, jnp.abs(jnp.dot(point, tangential)), angle, youngs_modulus, poisson_ratio)
+        profile `point` (tooth frame, mm) along the unit transverse `normal`: at $x_F$ on the
+        centre line, $y_F = |y|$ off it, at the angle $\\gamma$ between the normal and the
+        direction across the tooth ($\\cos\\gamma = |n_y|$)."""
+        angle = jnp.arctan2(jnp.abs(normal[0]), jnp.abs(normal[1]))
+        x = jnp.linspace(self.x[0], point[0], SECTION_SAMPLES)
+        h = jnp.interp(x, self.x, self.half_thickness)
+        return section_compliance(x, h, jnp.abs(point[1]), angle, youngs_modulus, poisson_ratio)
 
 
 class PointContactLoads(eqx.Module):
@@ -156,7 +153,7 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     slice_index = jnp.where(at_end, n_mid + jnp.argmax(te[..., n_mid:], axis=-1), best)
     neighbour = jnp.where(x >= 0.0, centre + 1, centre - 1)
     weight = jnp.where(at_end, 0.0, jnp.abs(x))
-    start = jnp.where(at_end, slice_index, centre)
+    start = jnp.where(at_end, slice_index, jnp.where(ok, centre, best))
     other = jnp.where(at_end, slice_index, neighbour)
 
     def interpolate(field):

@@ -8,10 +8,10 @@ normal load $F$ at the angle $\gamma$ to the tooth's transverse direction, appli
 distance $y_F$ from the centre line, bends, shears and compresses the tooth; per unit face
 width, with the section area $A = 2h$ and moment of inertia $I = (2h)^3/12$,
 
-$$c_t = \int_{x_r}^{x_F}\Big[\frac{\big((x_F - x)\cos\gamma - y_F\sin\gamma\big)^2}{E'I}
-+ \frac{1.2\cos^2\gamma}{G'A} + \frac{\sin^2\gamma}{E'A}\Big]dx$$
+$$c_t = \int_{x_r}^{x_F}\Big[\frac{\big((x_F - x)\cos\gamma - y_F\sin\gamma\big)^2}{EI}
++ \frac{1.2\cos^2\gamma}{GA} + \frac{\sin^2\gamma}{EA}\Big]dx$$
 
-(mm²/N; plane strain, $E' = E/(1-\nu^2)$, $G' = E'/(2(1+\nu))$), by the trapezoidal rule on
+(mm²/N; $G = E/(2(1+\nu))$, the involute tooth's convention), by the trapezoidal rule on
 the samples.
 
 **A point load on a tooth of finite face width.** Along the face the tooth is taken as
@@ -52,8 +52,8 @@ def section_compliance(x: ArrayLike, half_thickness: ArrayLike, load_offset: Arr
     (rad) to the transverse direction. The formula is the module's."""
     x = jnp.asarray(x, float)
     h = jnp.asarray(half_thickness, float)
-    e_plane = youngs_modulus / (1.0 - poisson_ratio**2)
-    g_plane = e_plane / (2.0 * (1.0 + poisson_ratio))
+    e_plane = youngs_modulus
+    g_plane = youngs_modulus / (2.0 * (1.0 + poisson_ratio))
     area = 2.0 * h
     inertia = area**3 / 12.0
     cos, sin = jnp.cos(load_angle), jnp.sin(load_angle)
@@ -144,7 +144,8 @@ def shared_rotation(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear:
     theta = jax.lax.stop_gradient(theta)
     # one Newton step on the traced inputs: the implicit function's derivative at the root
     value, slope = _residual_and_slope(theta, torque, gaps, arms, linear, hertz)
-    return theta - value / jnp.where(slope > 0.0, slope, 1.0)
+    # no pair loaded (zero torque): the rigid contact, differentiable in the gaps
+    return jnp.where(slope > 0.0, theta - value / jnp.where(slope > 0.0, slope, 1.0), jnp.min(gaps / arms, axis=-1))
 
 
 def share_load(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear: ArrayLike,

@@ -110,7 +110,7 @@ class OptimizeSettings:
     @classmethod
     def from_dict(cls, table: dict) -> OptimizeSettings:
         if not isinstance(table, dict):
-            raise SettingsError("optimize: must be a TOML table")
+            raise SettingsError("[optimize] must be a TOML table")
         for key in table:
             if key not in _KEYS:
                 raise _fail(key, f"unknown field; allowed: {', '.join(sorted(_KEYS))}")
@@ -161,12 +161,12 @@ class OptimizeSettings:
         """The objective (at this section's accuracy) and the design space of `scene`."""
         if scene.operating.torque is None or "impact" not in scene.effects:
             raise SettingsError(
-                "optimize: the scene needs a torque ([operating] torque_Nm) and effects = [\"impact\"] ([analysis])"
+                "[optimize] the scene needs a torque ([operating] torque_Nm) and effects = [\"impact\"] ([analysis])"
             )
         try:
             space = DesignSpace.for_scene(scene, **self.bounds)
         except ValueError as err:
-            raise SettingsError(f"optimize: {err}") from None
+            raise SettingsError(f"[optimize] {err}") from None
         if self.accuracy is not None:
             scene = scene_with_accuracy(scene, Accuracy.preset(self.accuracy))
         errors = None
@@ -191,7 +191,7 @@ class OptimizeSettings:
                 lte_penalty=lte,
             )
         except ValueError as err:
-            raise SettingsError(f"optimize: {err}") from None
+            raise SettingsError(f"[optimize] {err}") from None
         return objective, space
 
     def ga_config(self) -> GAConfig:
