@@ -114,27 +114,28 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
         return 2
     if out is not None and plot:
         name = "built-in default scene" if scene_path is None else Path(scene_path).name
-        report["files"] += write_plots(report, Path(out), name)
+        report["files"] += write_plots(report, Path(out), name, scene)
     print(json.dumps({"sweep": report}, indent=2) if as_json else summary(report))
     return 0
 
 
-def write_plots(report: dict, directory: Path, scene_name: str = "scene") -> list[str]:
+def write_plots(report: dict, directory: Path, scene_name: str = "scene", scene=None) -> list[str]:
     """`sweep_force_map.png` (F_s over torque × speed, edge strikes marked) and
-    `sweep_harris.png` (LTE peak-to-peak against torque), each titled with `scene_name`."""
+    `sweep_harris.png` (LTE peak-to-peak against torque), each titled with `scene_name` and,
+    given the `scene`, its pair and accuracy (`plot.scene_title`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     from ..io import plot
 
     paths = []
+    described = "" if scene is None else "\n" + plot.scene_title(scene, operating=False)
     ax = plot.impact_force_map(report["torque_Nm"], report["speed_rpm"], report["impact_force_N"],
-                               report["impact_regime"])
-    ax.set_title(f"{scene_name}: mesh-in impact force")
+                               report["impact_regime"], title=f"{scene_name}: mesh-in impact force{described}")
     paths.append(directory / "sweep_force_map.png")
     ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
-    ax = plot.harris_map(report["torque_Nm"], [report["lte_peak_to_peak_um"]])
-    ax.set_title(f"{scene_name}: loaded TE peak-to-peak")
+    ax = plot.harris_map(report["torque_Nm"], [report["lte_peak_to_peak_um"]],
+                         title=f"{scene_name}: loaded TE peak-to-peak{described}")
     paths.append(directory / "sweep_harris.png")
     ax.figure.savefig(paths[-1], dpi=120, bbox_inches="tight")
     return [str(p) for p in paths]

@@ -2,7 +2,9 @@
 
 Every function draws on an `Axes` (a new figure when `ax` is None) and returns it. Lengths
 are shown in mm, transmission error in micrometres along the line of action, angles in
-degrees.
+degrees. Every function takes a `title`: a string, or a `Scene`, whose `scene_title` (pair,
+operating point and accuracy; the maps over torque leave the operating point out) then heads
+the figure.
 """
 
 from __future__ import annotations
@@ -12,6 +14,43 @@ import math
 import numpy as np
 
 from ..tca import ContactKind
+
+
+def scene_title(scene, operating: bool = True) -> str:
+    """A figure title naming its scene in an engineer's words: the pair (family, teeth,
+    normal module, face width), the operating point where it has one (left out with
+    `operating=False`, for figures that sweep it), and the accuracy (positions per pitch ×
+    face slices), e.g. "involute helical gear pair z 29/71, m_n 5 mm, b 42 mm; 1000 N·m,
+    5000 rpm; 32 positions/pitch × 21 slices"."""
+    pair = scene.pair
+    report = pair.geometry_report()
+    words = type(pair).scene_file.description
+    if "helix_angle_deg" in report and float(np.asarray(report["helix_angle_deg"])) == 0.0:
+        words = words.replace("helical", "spur")
+    parts = [f"{words} z {pair.teeth[0]}/{pair.teeth[1]}"]
+    for key, name in (("normal_module_mm", "m_n"), ("face_width_mm", "b")):
+        if key in report:
+            parts.append(f"{name} {float(np.asarray(report[key])):g} mm")
+    load = []
+    if operating and scene.operating.torque is not None:
+        load.append(f"{float(np.asarray(scene.operating.torque)) / 1e3:g} N·m")
+    speed = float(np.asarray(scene.operating.speed))
+    if operating and speed != 0.0:
+        load.append(f"{speed * 30.0 / math.pi:.4g} rpm")
+    accuracy = f"{scene.accuracy.positions_per_pitch} positions/pitch × {scene.accuracy.face_slices} slices"
+    return "; ".join([", ".join(parts)] + ([", ".join(load)] if load else []) + [accuracy])
+
+
+def _title_text(title, operating: bool = True) -> str:
+    return title if isinstance(title, str) else scene_title(title, operating)
+
+
+def _title(ax, title, operating: bool = True):
+    """Head `ax` with `title` (a string, or a scene named by `scene_title`, without its
+    operating point where the figure sweeps it); returns `ax`."""
+    if title is not None:
+        ax.set_title(_title_text(title, operating), fontsize="medium")
+    return ax
 
 
 def _axes(ax):
@@ -25,11 +64,11 @@ def _axes(ax):
     return ax
 
 
-def transmission_error(result, ax=None, label=None, **kwargs):
+def transmission_error(result, ax=None, label=None, title=None, **kwargs):
     """Unloaded TE of a `TCAResult` (um along the line of action) against the pinion angle
     (deg)."""
     te = np.asarray(result.transmission_error_line) * 1e3
-    return _te_curve(ax, result.pinion_angle, te, "TE along line of action (um)", label, **kwargs)
+    return _title(_te_curve(ax, result.pinion_angle, te, "TE along line of action (um)", label, **kwargs), title)
 
 
 def _te_curve(ax, pinion_angle, te_um, ylabel, label, **kwargs):
@@ -44,7 +83,7 @@ def _te_curve(ax, pinion_angle, te_um, ylabel, label, **kwargs):
     return ax
 
 
-def contact_path(result, ax=None, tolerance=1e-4, cmap="viridis"):
+def contact_path(result, ax=None, tolerance=1e-4, cmap="viridis", title=None):
     """Contact points on the pinion flank over the cycle: axial position (mm) against roll
     length (mm), coloured by pinion angle; edge contacts are marked with crosses.
 
@@ -66,11 +105,12 @@ def contact_path(result, ax=None, tolerance=1e-4, cmap="viridis"):
     ax.set_xlabel("axial position z (mm)")
     ax.set_ylabel("pinion roll length s (mm)")
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, title)
 
 
-def separation_map(result, position: int, ax=None):
-    """Initial separation (um) of every slice of every pair at one position."""
+def separation_map(result, position: int, ax=None, title=None):
+    """Initial separation (um) of every slice of every pair at one position (its pinion angle
+    in the title, after `title` where one is given)."""
     ax = _axes(ax)
     sep = np.asarray(result.separation)[position] * 1e3
     z = np.asarray(result.slice_z)
@@ -81,19 +121,19 @@ def separation_map(result, position: int, ax=None):
             ax.plot(z[order][finite], row[order][finite], marker=".", label=f"pair {k}")
     ax.set_xlabel("axial position z (mm)")
     ax.set_ylabel("separation (um)")
-    ax.set_title(f"pinion angle {math.degrees(float(np.asarray(result.pinion_angle)[position])):.2f} deg")
+    angle = f"pinion angle {math.degrees(float(np.asarray(result.pinion_angle)[position])):.2f} deg"
     ax.legend()
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, angle if title is None else f"{_title_text(title)}\n{angle}")
 
 
-def loaded_transmission_error(ltca, ax=None, label=None, **kwargs):
+def loaded_transmission_error(ltca, ax=None, label=None, title=None, **kwargs):
     """Loaded TE of an `LTCAResult` (um along the line of action) against pinion angle."""
     te = np.asarray(ltca.transmission_error_line) * 1e3
-    return _te_curve(ax, ltca.pinion_angle, te, "loaded TE along line of action (um)", label, **kwargs)
+    return _title(_te_curve(ax, ltca.pinion_angle, te, "loaded TE along line of action (um)", label, **kwargs), title)
 
 
-def load_sharing(ltca, ax=None):
+def load_sharing(ltca, ax=None, title=None):
     """Share of the load carried by each tooth pair over the cycle."""
     ax = _axes(ax)
     angle = np.degrees(np.asarray(ltca.pinion_angle))
@@ -106,10 +146,10 @@ def load_sharing(ltca, ax=None):
     ax.set_ylim(-0.02, 1.02)
     ax.legend()
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, title)
 
 
-def contact_pattern(tca, ltca, ax=None, quantity="pressure", cmap="inferno"):
+def contact_pattern(tca, ltca, ax=None, quantity="pressure", cmap="inferno", title=None):
     """Loaded contact pattern on the pinion flank over the cycle: every loaded point at its
     axial position (mm) and roll length (mm), coloured by Hertz pressure (MPa) or load (N)."""
     ax = _axes(ax)
@@ -124,10 +164,10 @@ def contact_pattern(tca, ltca, ax=None, quantity="pressure", cmap="inferno"):
     ax.set_xlabel("axial position z (mm)")
     ax.set_ylabel("pinion roll length s (mm)")
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, title)
 
 
-def mesh_stiffness(ltca, ax=None, iso=None):
+def mesh_stiffness(ltca, ax=None, iso=None, title=None):
     """Tangent and secant mesh stiffness per unit face width over the cycle (N/(mm·um)),
     with ISO 6336's c_gamma_alpha as a line when `iso` (an `IsoStiffness`) is given."""
     ax = _axes(ax)
@@ -140,26 +180,26 @@ def mesh_stiffness(ltca, ax=None, iso=None):
     ax.set_ylabel("mesh stiffness (N/(mm um))")
     ax.legend()
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, title)
 
 
-def impact_force_map(torques_Nm, speeds_rpm, force_N, regime=None, ax=None, cmap="magma"):
+def impact_force_map(torques_Nm, speeds_rpm, force_N, regime=None, ax=None, cmap="magma", title=None):
     """Mesh-in impact force F_s (N) over pinion torque (N·m, x) × speed (rpm, y), as
     `gearjax sweep` or `ImpactSweep` give it (`force_N[torque][speed]`); grid points with
     edge contact (`regime[torque][speed] == "edge"`) are marked with crosses. With a single
     torque or speed the map is drawn as curves against the other axis."""
-    return _force_map(torques_Nm, speeds_rpm, force_N, regime, ax, cmap,
-                      ("pinion torque (N m)", "{:g} N m"), ("pinion speed (rpm)", "{:g} rpm"))
+    return _title(_force_map(torques_Nm, speeds_rpm, force_N, regime, ax, cmap,
+                             ("pinion torque (N m)", "{:g} N m"), ("pinion speed (rpm)", "{:g} rpm")), title, False)
 
 
-def regime_map(values, torques_Nm, force_N, regime, name="tip relief (um)", ax=None, cmap="magma"):
+def regime_map(values, torques_Nm, force_N, regime, name="tip relief (um)", ax=None, cmap="magma", title=None):
     """The regime map: impact force (colour) and edge contact (crosses) over a design
     parameter (x; e.g. the tip relief amount of each design of a `design_sweep`) × pinion
     torque (N·m, y); `force_N[design][torque]`, `regime[design][torque]` ("surface" |
     "edge"). The boundary between plain cells and crosses is the torque at which the
     modification's clearance closes at the tip edge."""
-    return _force_map(values, torques_Nm, force_N, regime, ax, cmap, (name, name + " = {:g}"),
-                      ("pinion torque (N m)", "{:g} N m"))
+    return _title(_force_map(values, torques_Nm, force_N, regime, ax, cmap, (name, name + " = {:g}"),
+                             ("pinion torque (N m)", "{:g} N m")), title, False)
 
 
 def _cell_edges(v):
@@ -203,7 +243,7 @@ def _force_map(x, y, force_N, regime, ax, cmap, x_axis, y_axis):
     return ax
 
 
-def harris_map(torques_Nm, lte_peak_to_peak_um, labels=None, ax=None):
+def harris_map(torques_Nm, lte_peak_to_peak_um, labels=None, ax=None, title=None):
     """Harris map: loaded TE peak-to-peak (um along the line of action) against pinion
     torque (N·m), one curve per design (`lte_peak_to_peak_um[design][torque]`)."""
     ax = _axes(ax)
@@ -215,4 +255,27 @@ def harris_map(torques_Nm, lte_peak_to_peak_um, labels=None, ax=None):
     if labels is not None:
         ax.legend()
     ax.grid(True, alpha=0.3)
-    return ax
+    return _title(ax, title, False)
+
+
+def optimisation_history(results, ax=None, title=None):
+    """Convergence of one or more `OptimizationResult`s: the search's best objective (N or
+    mm/s, at the search's accuracy) against objective evaluations, one curve per result
+    (evaluations spread evenly over its steps); the certified value of its best design
+    (at the certification accuracy) as a marker at its last evaluation count, and the
+    initial design's objective as a dotted line."""
+    ax = _axes(ax)
+    results = [results] if hasattr(results, "history") else list(results)
+    for r in results:
+        per_step = r.evaluations / max(r.steps, 1)
+        (line,) = ax.plot(per_step * np.arange(1, len(r.history) + 1), r.history, ".-", label=f"{r.method}: search")
+        if r.certified_objective is not None:
+            ax.plot([r.evaluations], [r.certified_objective], "*", ms=12, color=line.get_color(),
+                    label=f"{r.method}: certified at '{r.certification.accuracy}'")
+    ax.axhline(results[0].initial_objective, color="k", ls=":", lw=1.0, label="initial design")
+    ax.set_xscale("log")
+    ax.set_xlabel("objective evaluations")
+    ax.set_ylabel("best objective")
+    ax.legend()
+    ax.grid(True, alpha=0.3, which="both")
+    return _title(ax, title)
