@@ -19,7 +19,7 @@ from ..geometry.modification import FlankModification
 from ..ltca import COMPLIANCE_MODELS
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from ..units import Material
-from .scene_keys import check_declared, field_message, toml_value
+from .scene_keys import check_declared, declared, field_message, toml_value
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -63,27 +63,23 @@ effects = ["impact"]         # LTCA runs whenever a torque is given
 
 #: `[optimize]` is read by `gearjax.optimize.settings` (the `gearjax optimize` command).
 _SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis", "optimize")
-_MOD_KEYS = {
-    "root_relief_um": ("root_relief", 1e-3),
-    "tip_relief_um": ("tip_relief", 1e-3),
-    "root_relief_length": ("root_relief_length", 1.0),
-    "tip_relief_length": ("tip_relief_length", 1.0),
-    "crowning_um": ("crowning", 1e-3),
-    "unmodified_length": ("unmodified_length", 1.0),
-}
-_ERROR_KEYS = {
-    "base_pitch_deviation_um": "base_pitch_deviation",
-    "pitch_deviation_um": "pitch_deviation",
-    "misalignment_um": "misalignment",
-}
-_OPERATING_KEYS = {"torque_Nm", "speed_rpm"}
-_MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio", "density"}
-_IMPACT_KEYS = {"inertia_kg_m2"}
+
+def _names(section: str) -> frozenset[str]:
+    return frozenset(k.key for k in declared(section))
+
+
+#: The keys of each section, from their declarations (`scene_keys`); the amounts in µm map
+#: to the constructors' mm fields of the same name without `_um`.
+_MOD_KEYS = {k.key: (k.key.removesuffix("_um"), 1e-3 if k.unit == "µm" else 1.0) for k in declared("modification")}
+_ERROR_KEYS = {k.key: k.key.removesuffix("_um") for k in declared("errors")}
+_OPERATING_KEYS = _names("operating")
+_MATERIAL_KEYS = _names("material")
+_IMPACT_KEYS = _names("impact")
 #: The `Scene` constructor's keywords that its errors name: (section, file key).
 _SCENE_FIELDS = {"hub_radius": ("ltca", "hub_radius"), "inertia": ("impact", "inertia_kg_m2"),
                  "compliance": ("ltca", "compliance")} | {name: ("modification", key) for key, (name, _) in _MOD_KEYS.items()}
-_LTCA_KEYS = {"compliance", "hub_radius", "extended_contact"}.union(*(cls.scene_file.keys for cls in COMPLIANCE_MODELS))
-_ANALYSIS_KEYS = {"accuracy", "effects", "tca_method", "positions_per_pitch", "face_slices", "dtype", "pitches"}
+_LTCA_KEYS = _names("ltca")
+_ANALYSIS_KEYS = _names("analysis")
 
 
 def _fail(field: str, message: str) -> SceneFileError:

@@ -15,6 +15,7 @@ import dataclasses
 import functools
 import math
 import re
+from collections.abc import Callable
 from typing import Any
 
 from ..accuracy import DTYPES, PRESETS, TCA_METHODS
@@ -183,32 +184,34 @@ def _optimize_keys() -> tuple[SceneKey, ...]:
 
 
 @functools.cache
-def section_keys() -> dict[str, tuple[SceneKey, ...]]:
-    """Every section but `[pair]`: section name -> its keys, in the order of the reference."""
+def _sections() -> dict[str, Callable[[], tuple[SceneKey, ...]]]:
+    """Every section but `[pair]`: section name -> the function declaring its keys (each
+    built on demand: `[optimize]`'s declarations import the optimiser, which reads scene
+    files)."""
     return {
-        "modification": _modification("pinion's drive-flank"),
-        "gear_modification": _modification("gear's drive-flank"),
-        "errors": (
+        "modification": lambda: _modification("pinion's drive-flank"),
+        "gear_modification": lambda: _modification("gear's drive-flank"),
+        "errors": lambda: (
             SceneKey("base_pitch_deviation_um", "µm", 0.0, "f_pb: pinion minus gear base pitch; pair k shifted by k f_pb", _ERROR),
             SceneKey("pitch_deviation_um", "µm", 0.0, "f_p: the tooth of pair 0 stands proud", _ERROR),
             SceneKey("misalignment_um", "µm", 0.0, "f_ma: linear lead deviation over the face width", _ERROR),
         ),
-        "operating": (
+        "operating": lambda: (
             SceneKey("torque_Nm", "N·m", None, "pinion torque; a torque runs the loaded contact", (0.0, MAX_TORQUE_NM, True, True),
                      absent="unloaded: the rigid TCA only"),
             SceneKey("speed_rpm", "rpm", 0.0, "pinion speed; used by the impact only", (0.0, MAX_SPEED_RPM, True, True)),
         ),
-        "material": (
+        "material": lambda: (
             SceneKey("youngs_modulus", "MPa", 206000.0, "Young's modulus E of both gears", _POSITIVE),
             SceneKey("poisson_ratio", "", 0.3, "Poisson's ratio ν", (0.0, 0.5, True, False)),
             SceneKey("density", "t/mm³", 7.85e-9, "density ρ (the gears' inertia when `[impact]` gives none)", _POSITIVE),
         ),
-        "ltca": _ltca_keys(),
-        "impact": (
+        "ltca": _ltca_keys,
+        "impact": lambda: (
             SceneKey("inertia_kg_m2", "kg·m²", None, "J1, J2 of the rotating assemblies", _POSITIVE,
                      absent="solid discs of the gears' tip radius and face width", allowed="two numbers"),
         ),
-        "analysis": (
+        "analysis": lambda: (
             SceneKey("accuracy", "", "default", "accuracy preset (docs: What accuracy costs)", choices=_PRESETS),
             SceneKey("effects", "", [], "stages beyond the TCA: " + ", ".join(f"`{e}`" for e in EFFECTS)
                      + " (the loaded contact runs whenever a torque is given)", allowed="a list of " + ", ".join(
@@ -222,17 +225,27 @@ def section_keys() -> dict[str, tuple[SceneKey, ...]]:
             SceneKey("dtype", "", None, "floating-point precision", choices=DTYPES, absent="the preset's"),
             SceneKey("pitches", "", 1, "angular pitches covered", (1, MAX_PITCHES, True, True), integer=True),
         ),
-        "optimize": _optimize_keys(),
+        "optimize": _optimize_keys,
     }
+
+
+def section_keys() -> dict[str, tuple[SceneKey, ...]]:
+    """Every section but `[pair]`: section name -> its keys, in the order of the reference."""
+    return {name: declare() for name, declare in _sections().items()}
+
+
+def declared(section: str) -> tuple[SceneKey, ...]:
+    """The keys of one section (not `[pair]`), in the order of the reference."""
+    return _sections()[section]()
 
 
 def check_declared(section: str, table: dict) -> None:
     """The declared bounds and choices of `section`'s keys in `table`, in the file's units:
     `ValueError("[section] key: must be in [low, high] unit; got value unit")`. Values of
     another type are left to the section's reader, which names them."""
-    declared = {k.key: k for k in section_keys().get(section, ())}
+    keys = {k.key: k for k in declared(section)} if section in _sections() else {}
     for name, value in table.items():
-        key = declared.get(name)
+        key = keys.get(name)
         if key is None:
             continue
         if key.choices is not None and isinstance(value, str) and value not in key.choices:

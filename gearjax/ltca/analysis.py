@@ -28,6 +28,7 @@ from .._numerics import safe_divide, safe_sqrt
 from .._solution import RESULTS, first_failure
 from ..tca import ContactKind, TCAResult
 from ..units import Material
+from .hertz_point import effective_modulus
 from .model import ContactModel
 from .solver import NO_CONTACT, ContactProblem, solve_with
 
@@ -314,5 +315,5 @@ def hertz_pressure(tca: TCAResult, loads, weights, material: Material, n_mid: in
     frac = tca.transverse_normal_fraction[..., :n_mid]
     length = tca.slice_width[..., :n_mid] / frac
     curvature = frac * (1.0 / tca.pinion_parameter[..., :n_mid] + 1.0 / tca.gear_parameter[..., :n_mid])
-    e_star = material.youngs_modulus / (2 * (1 - material.poisson_ratio**2))
+    e_star = effective_modulus(material.youngs_modulus, material.poisson_ratio)
     return safe_sqrt(jnp.maximum(loads, 0.0) / (length * weights) * e_star * curvature / jnp.pi)
