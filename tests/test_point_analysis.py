@@ -77,6 +77,21 @@ def test_the_contact_ellipse_is_hertzs_for_the_pairs_load(seed):
     assert (np.asarray(result.semi_major)[on] > 3 * np.asarray(result.semi_minor)[on]).all()
 
 
+def test_the_contacts_profile_curvature_is_the_basic_racks(seed):
+    """The generated flanks touch with the relative curvature of the rack's arcs across the
+    profile, B ≈ (1/ρ_a − 1/ρ_f)/2 (the normal section of a circular-arc flank is close to
+    its rack's arc; measured within 4 %, `tools/dca_point_contact.py`), and A ≪ B: the
+    flanks are nearly straight along the face."""
+    pair, _, loaded = seed
+    result = loaded(TORQUE)
+    on = np.asarray(result.loads) > 0
+    a, b = np.asarray(result.curvature_a)[on], np.asarray(result.curvature_b)[on]
+    m = float(pair.normal_module)
+    rack_b = 0.5 * (1.0 / (pair.rack.convex_radius * m) - 1.0 / (pair.rack.concave_radius * m))
+    np.testing.assert_allclose(b, rack_b, rtol=0.1)
+    assert (a > 0).all() and (a < 0.2 * b).all()
+
+
 def test_the_tooth_section_runs_from_the_root_circle_to_the_tip(seed):
     pair, _, _ = seed
     for gear in (0, 1):

@@ -26,25 +26,10 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
-from gearjax.ltca.hertz_point import effective_modulus, ellipse_ratio, hertz_point_contact  # noqa: E402
 from gearjax.ltca.point_analysis import point_contact_analysis  # noqa: E402
 from gearjax.papers.double_arc import SEED_CASE  # noqa: E402
 
 WINDOW = (-2, -1, 0, 1, 2, 3)
-
-
-def _curvature_b(kappa, coefficient, modulus):
-    """B (mm⁻¹) of contacts whose ellipse ratio is `kappa` (b/a) and approach coefficient
-    `coefficient` (δ = c P^(2/3)): B/A by bisection on `ellipse_ratio`, then A from
-    c ∝ A^(1/3) at that shape."""
-    lo, hi = np.ones_like(kappa), np.full_like(kappa, 1e4)
-    for _ in range(60):
-        mid = np.sqrt(lo * hi)
-        wider = np.asarray(ellipse_ratio(jnp.asarray(mid))) > kappa
-        lo, hi = np.where(wider, mid, lo), np.where(wider, hi, mid)
-    ratio = np.sqrt(lo * hi)
-    unit = np.asarray(hertz_point_contact(1.0, 1.0, jnp.asarray(ratio), modulus).approach_coefficient)  # A = 1
-    return ratio * (coefficient / unit) ** 3
 
 
 def figures(accuracy: str, torque_Nm: float) -> dict:
@@ -60,10 +45,7 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
     rack = pair.rack
     m = float(pair.normal_module)
     rack_b = 0.5 * (1.0 / (rack.convex_radius * m) - 1.0 / (rack.concave_radius * m))
-    modulus = effective_modulus(206000.0, 0.3)
-    # B from the ellipse: b/a fixes B/A, the coefficient c (δ = c P^(2/3)) fixes the scale
-    kappa = np.asarray(r.semi_minor)[on] / np.asarray(r.semi_major)[on]
-    curvature_b = _curvature_b(kappa, np.asarray(r.hertz_coefficient)[on], modulus)
+    curvature_b = np.asarray(r.curvature_b)[on]
     span = lambda x: [round(float(np.min(x)), 4), round(float(np.max(x)), 4)]  # noqa: E731
     return {
         "accuracy": accuracy,

@@ -82,6 +82,8 @@ class PointContactLoads(eqx.Module):
         stiffness: $dF_k/d\\delta_k$ of each pair (N/mm; 0 out of contact).
         mesh_stiffness: $dT_2/d\\Theta$ (N·mm/rad), shape (pos,).
         semi_major, semi_minor: contact ellipse semi-axes (mm).
+        curvature_a, curvature_b: the relative curvatures $A \\le B$ (1/mm) that the Hertz
+            law takes (`relative_curvatures`; edge contacts floored at `MIN_CURVATURE`).
         max_pressure: $p_0$ (MPa).
         linear_compliance: $c_k$ (mm/N); hertz_coefficient: $h_k$ (mm/N^(2/3)).
         gaps: rigid gaps $e_k$ (mm); arms: $m_k$ (mm).
@@ -95,6 +97,8 @@ class PointContactLoads(eqx.Module):
     mesh_stiffness: Float[Array, " pos"]
     semi_major: Float[Array, "pos pair"]
     semi_minor: Float[Array, "pos pair"]
+    curvature_a: Float[Array, "pos pair"]
+    curvature_b: Float[Array, "pos pair"]
     max_pressure: Float[Array, "pos pair"]
     linear_compliance: Float[Array, "pos pair"]
     hertz_coefficient: Float[Array, "pos pair"]
@@ -195,13 +199,17 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
+    # the pair axis holds each zone's window in turn (`tca.result.merge_zones`): each zone's
+    # coefficients are evaluated on its own part only
+    n = gaps.shape[-1] // len(zones)
     per_zone = []
-    for zone in zones:
+    for i, zone in enumerate(zones):
+        part = slice(i * n, (i + 1) * n)
         per_zone.append(jnp.vectorize(
             lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
             signature="(),(),(),(),(),(),(3),()->(4)",
-        )(k, phi1, u1, u2, z, te, normal, frac))
-    coefficients = jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
+        )(k[:, part], phi1[:, part], u1[:, part], u2[:, part], z[:, part], te[:, part], normal[:, part], frac[:, part]))
+    coefficients = jnp.concatenate(per_zone, axis=1)
     finite = jnp.isfinite(gaps)
     # pairs out of mesh have no contact: unit coefficients keep their (zero) loads finite
     coefficients = jnp.where(finite[..., None], coefficients, 1.0)
@@ -222,6 +230,8 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
         mesh_stiffness=jnp.sum(arms**2 * stiffness, axis=-1),
         semi_major=contact.semi_major,
         semi_minor=contact.semi_minor,
+        curvature_a=coefficients[..., 2],
+        curvature_b=coefficients[..., 3],
         max_pressure=contact.max_pressure,
         linear_compliance=linear,
         hertz_coefficient=hertz,
