@@ -2,7 +2,10 @@
 β 15°) at a pinion torque, at one or more accuracy presets, so that the figures can be
 compared between grids (`gearjax.ltca.point_analysis`; not yet a stage of `simulate`).
 
-    python tools/dca_point_contact.py [--torque-Nm 100] [--accuracy fast default]
+    python tools/dca_point_contact.py [--torque-Nm 100] [--accuracy fast default default@64x41]
+
+An accuracy is a preset's name, or `PRESET@PxS`: the preset with P positions per pitch and S
+face slices (to tell the two grids' effects apart).
 
 Prints, per preset, a JSON line: the loaded and unloaded TE peak-to-peak along the line of
 action, the gear's lag and the approach it means, the loads, the pairs' tangent stiffness,
@@ -32,11 +35,22 @@ from gearjax.papers.double_arc import SEED_CASE  # noqa: E402
 WINDOW = (-2, -1, 0, 1, 2, 3)
 
 
+def parse_accuracy(spec: str) -> gj.Accuracy:
+    """`PRESET` or `PRESET@PxS` (positions per pitch × face slices)."""
+    name, _, grid = spec.partition("@")
+    accuracy = gj.Accuracy.preset(name)
+    if grid:
+        positions, slices = (int(v) for v in grid.lower().split("x"))
+        accuracy = accuracy.replace(positions_per_pitch=positions, face_slices=slices)
+    return accuracy
+
+
 def figures(accuracy: str, torque_Nm: float) -> dict:
     pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
                                 SEED_CASE["face_width"], 0.0)
     start = time.perf_counter()
-    tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy=accuracy), throw=False).tca
+    grid = parse_accuracy(accuracy)
+    tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy=grid), throw=False).tca
     r = eqx.filter_jit(point_contact_analysis)(pair.resolve(), tca, jnp.asarray(1e3 * torque_Nm))
     jax.block_until_ready(r.rotation)
     ra2 = float(tca.action_radius[1])
@@ -49,6 +63,8 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
     span = lambda x: [round(float(np.min(x)), 4), round(float(np.max(x)), 4)]  # noqa: E731
     return {
         "accuracy": accuracy,
+        "positions_per_pitch": grid.positions_per_pitch,
+        "face_slices": grid.face_slices,
         "torque_Nm": torque_Nm,
         "seconds_with_compilation": round(time.perf_counter() - start, 1),
         "te_peak_to_peak_um": 1e3 * ra2 * float(tca.te_peak_to_peak),
@@ -63,6 +79,7 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
         "semi_axes_mm": [round(float(np.asarray(r.semi_major)[on].max()), 4),
                          round(float(np.asarray(r.semi_minor)[on].max()), 4)],
         "max_pressure_MPa": float(np.asarray(r.max_pressure).max()),
+        "relative_curvature_A_per_mm": span(np.asarray(r.curvature_a)[on]),
         "relative_curvature_B_per_mm": span(curvature_b),
         "rack_relative_curvature_B_per_mm": rack_b,
     }

@@ -178,6 +178,11 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
                            sections: tuple[ToothSection, ToothSection] | None = None) -> PointContactLoads:
     """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
 
+    Each contact is located between the TCA's face slices by a parabola through three of
+    them, so the slices must be close compared with the width of a point contact's peak:
+    on the seed pair (m_n 4, b 55 mm) the `default` grid (21 slices) is converged to under
+    1 % against 41 slices, and `fast` (9 slices) is not (decision 0009).
+
     Args:
         pair: the resolved pair.
         tca: its `tooth_contact_analysis`.
