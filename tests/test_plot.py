@@ -3,6 +3,7 @@
 
 from types import SimpleNamespace
 
+import equinox as eqx
 import numpy as np
 import pytest
 
@@ -28,6 +29,10 @@ def test_scene_title_names_the_pair_the_operating_point_and_the_accuracy():
     assert "N·m" not in rigid and "rpm" not in rigid
     assert plot.scene_title(_spur_scene(), operating=False) == (
         "involute spur gear pair z 20/40, m_n 3 mm, b 30 mm; 24 positions/pitch × 15 slices")
+    assert plot.scene_title(_spur_scene(), operating=False, speed=True) == (
+        "involute spur gear pair z 20/40, m_n 3 mm, b 30 mm; 3000 rpm; 24 positions/pitch × 15 slices")
+    fast = eqx.tree_at(lambda s: s.operating, _spur_scene(), gj.OperatingPoint(torque_Nm=200.0, speed_rpm=12000.0))
+    assert "; 200 N·m, 12000 rpm; " in plot.scene_title(fast)
 
 
 def _fake_result():
@@ -60,8 +65,10 @@ def _history(method, certified):
 def test_every_figure_takes_its_scene_as_title(draw, request):
     scene = _spur_scene()
     ax = draw(scene)
-    swept = request.node.callspec.id in ("force_map", "regime_map", "harris")  # over torque: no operating point
-    assert ax.get_title() == plot.scene_title(scene, operating=not swept)
+    kind = request.node.callspec.id
+    swept = kind in ("force_map", "regime_map", "harris")  # over torque: no torque in the title
+    speed = None if not swept else kind == "regime_map"  # the regime map is drawn at one speed
+    assert ax.get_title() == plot.scene_title(scene, operating=not swept, speed=speed)
     matplotlib.pyplot.close(ax.figure)
     ax = draw(None)
     assert ax.get_title() == ""

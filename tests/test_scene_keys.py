@@ -59,6 +59,41 @@ def test_the_reference_declares_exactly_the_keys_the_readers_accept():
         assert {k.key for k in keys} == set(READERS[section]), section
 
 
+_RELIEF = {"root_relief_um": 8.0, "tip_relief_um": 9.0, "root_relief_length": 3.0, "tip_relief_length": 4.0,
+           "crowning_um": 7.0, "unmodified_length": 5.0}
+#: A valid value other than the default file's (or the default) for every declared key of
+#: the scene's sections, written here by hand: the scene readers take their key sets from the
+#: declarations, so a declared key that no reader uses would otherwise go unnoticed.
+CHANGED = {
+    **{("modification", k): v for k, v in _RELIEF.items()},
+    **{("gear_modification", k): v for k, v in _RELIEF.items()},
+    ("errors", "base_pitch_deviation_um"): 1.0, ("errors", "pitch_deviation_um"): 2.0,
+    ("errors", "misalignment_um"): 3.0,
+    ("operating", "torque_Nm"): 500.0, ("operating", "speed_rpm"): 3000.0,
+    ("material", "youngs_modulus"): 2.1e5, ("material", "poisson_ratio"): 0.29, ("material", "density"): 7.8e-9,
+    ("ltca", "compliance"): "iso", ("ltca", "coupling_length_mn"): 2.0, ("ltca", "hertz"): "linear",
+    ("ltca", "hub_radius"): 60.0, ("ltca", "extended_contact"): False,
+    ("impact", "inertia_kg_m2"): [0.1, 0.2],
+    ("analysis", "accuracy"): "fast", ("analysis", "effects"): [], ("analysis", "tca_method"): "plane_of_action",
+    ("analysis", "positions_per_pitch"): 20, ("analysis", "face_slices"): 11, ("analysis", "dtype"): "float32",
+    ("analysis", "pitches"): 2,
+}
+
+
+def test_every_declared_scene_key_has_a_changed_value_to_try():
+    declared = {(section, k.key) for section, keys in SECTIONS.items() if section != "optimize" for k in keys}
+    assert declared == set(CHANGED)
+
+
+@pytest.mark.parametrize("case", sorted(CHANGED), ids=lambda c: f"{c[0]}.{c[1]}")
+def test_each_declared_scene_key_changes_the_scene(case):
+    """The reader uses every key it accepts: another value gives another `Scene`."""
+    section, key = case
+    base = scene_file.scene_from_dict(copy.deepcopy(BASE))
+    changed = scene_file.scene_from_dict(_with(section, key, CHANGED[case]))
+    assert not bool(eqx.tree_equal(changed, base)), f"[{section}] {key} = {CHANGED[case]!r} left the scene as it was"
+
+
 def _id(case):
     section, key = case
     return f"{section}.{key.key}"

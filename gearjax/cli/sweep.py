@@ -15,8 +15,12 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # the command imports the engine only when it runs
+    from ..scene import Scene
 
 
 #: the sub-command's help line
@@ -119,7 +123,7 @@ def run_command(scene_path: str | None, torque: str, speed: str, out: str | None
     return 0
 
 
-def write_plots(report: dict, directory: Path, scene_name: str = "scene", scene=None) -> list[str]:
+def write_plots(report: dict, directory: Path, scene_name: str = "scene", scene: Scene | None = None) -> list[str]:
     """`sweep_force_map.png` (F_s over torque × speed, edge strikes marked) and
     `sweep_harris.png` (LTE peak-to-peak against torque), each titled with `scene_name` and,
     given the `scene`, its pair and accuracy (`plot.scene_title`)."""

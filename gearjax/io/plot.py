@@ -3,8 +3,8 @@
 Every function draws on an `Axes` (a new figure when `ax` is None) and returns it. Lengths
 are shown in mm, transmission error in micrometres along the line of action, angles in
 degrees. Every function takes a `title`: a string, or a `Scene`, whose `scene_title` (pair,
-operating point and accuracy; the maps over torque leave the operating point out) then heads
-the figure.
+operating point and accuracy; the maps over torque leave the torque out, and the speed where
+they sweep it too) then heads the figure.
 """
 
 from __future__ import annotations
@@ -14,19 +14,25 @@ import math
 import numpy as np
 
 from ..tca import ContactKind
+from .report import family_words
 
 
-def scene_title(scene, operating: bool = True) -> str:
+def scene_title(scene, operating: bool = True, speed: bool | None = None) -> str:
     """A figure title naming its scene in an engineer's words: the pair (family, teeth,
-    normal module, face width), the operating point where it has one (left out with
-    `operating=False`, for figures that sweep it), and the accuracy (positions per pitch ×
-    face slices), e.g. "involute helical gear pair z 29/71, m_n 5 mm, b 42 mm; 1000 N·m,
-    5000 rpm; 32 positions/pitch × 21 slices"."""
+    normal module, face width), the operating point where it has one, and the accuracy
+    (positions per pitch × face slices), e.g. "involute helical gear pair z 29/71, m_n 5 mm,
+    b 42 mm; 1000 N·m, 5000 rpm; 32 positions/pitch × 21 slices".
+
+    Args:
+        scene: the `Scene`.
+        operating: show the torque and speed (False for figures that sweep the torque).
+        speed: show the speed; as `operating` when None (a map over torque at one speed
+            passes `operating=False, speed=True`).
+    """
     pair = scene.pair
     report = pair.geometry_report()
-    words = type(pair).scene_file.description
-    if "helix_angle_deg" in report and float(np.asarray(report["helix_angle_deg"])) == 0.0:
-        words = words.replace("helical", "spur")
+    helix = report.get("helix_angle_deg")
+    words = family_words(type(pair).__name__, None if helix is None else float(np.asarray(helix)))
     parts = [f"{words} z {pair.teeth[0]}/{pair.teeth[1]}"]
     for key, name in (("normal_module_mm", "m_n"), ("face_width_mm", "b")):
         if key in report:
@@ -34,22 +40,23 @@ def scene_title(scene, operating: bool = True) -> str:
     load = []
     if operating and scene.operating.torque is not None:
         load.append(f"{float(np.asarray(scene.operating.torque)) / 1e3:g} N·m")
-    speed = float(np.asarray(scene.operating.speed))
-    if operating and speed != 0.0:
-        load.append(f"{speed * 30.0 / math.pi:.4g} rpm")
+    rpm = float(np.asarray(scene.operating.speed)) * 30.0 / math.pi
+    if (operating if speed is None else speed) and rpm != 0.0:
+        load.append(f"{rpm:.6g} rpm")
     accuracy = f"{scene.accuracy.positions_per_pitch} positions/pitch × {scene.accuracy.face_slices} slices"
     return "; ".join([", ".join(parts)] + ([", ".join(load)] if load else []) + [accuracy])
 
 
-def _title_text(title, operating: bool = True) -> str:
-    return title if isinstance(title, str) else scene_title(title, operating)
+def _title_text(title, operating: bool = True, speed: bool | None = None) -> str:
+    """`title` itself, or the `scene_title` of a scene."""
+    return title if isinstance(title, str) else scene_title(title, operating, speed)
 
 
-def _title(ax, title, operating: bool = True):
-    """Head `ax` with `title` (a string, or a scene named by `scene_title`, without its
-    operating point where the figure sweeps it); returns `ax`."""
+def _title(ax, title, operating: bool = True, speed: bool | None = None):
+    """Head `ax` with `title` (a string, or a scene named by `scene_title`, without the
+    part of its operating point that the figure sweeps); returns `ax`."""
     if title is not None:
-        ax.set_title(_title_text(title, operating), fontsize="medium")
+        ax.set_title(_title_text(title, operating, speed), fontsize="medium")
     return ax
 
 
@@ -199,7 +206,7 @@ def regime_map(values, torques_Nm, force_N, regime, name="tip relief (um)", ax=N
     "edge"). The boundary between plain cells and crosses is the torque at which the
     modification's clearance closes at the tip edge."""
     return _title(_force_map(values, torques_Nm, force_N, regime, ax, cmap, (name, name + " = {:g}"),
-                             ("pinion torque (N m)", "{:g} N m")), title, False)
+                             ("pinion torque (N m)", "{:g} N m")), title, False, True)
 
 
 def _cell_edges(v):
@@ -275,7 +282,7 @@ def optimisation_history(results, ax=None, title=None):
     ax.axhline(results[0].initial_objective, color="k", ls=":", lw=1.0, label="initial design")
     ax.set_xscale("log")
     ax.set_xlabel("objective evaluations")
-    ax.set_ylabel("best objective")
+    ax.set_ylabel("best objective (N, or mm/s for a velocity)")
     ax.legend()
     ax.grid(True, alpha=0.3, which="both")
     return _title(ax, title)

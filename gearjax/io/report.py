@@ -148,11 +148,16 @@ CONTACT_WORDS = {
 }
 
 
+def family_words(family: str, helix_angle_deg: float | None = None) -> str:
+    """A family (class name) in an engineer's words; an involute pair with no helix angle
+    is a spur pair."""
+    if family == "InvoluteGearPair" and helix_angle_deg == 0.0:
+        return "involute spur gear pair"
+    return FAMILY_WORDS.get(family, family)
+
+
 def _family_words(g: dict) -> str:
-    words = FAMILY_WORDS.get(g["family"], g["family"])
-    if g["family"] == "InvoluteGearPair" and g.get("helix_angle_deg") == 0.0:
-        words = "involute spur gear pair"
-    return words
+    return family_words(g["family"], g.get("helix_angle_deg"))
 
 
 def summary(out: dict) -> str:

@@ -64,7 +64,9 @@ effects = ["impact"]         # LTCA runs whenever a torque is given
 #: `[optimize]` is read by `gearjax.optimize.settings` (the `gearjax optimize` command).
 _SECTIONS = ("pair", "modification", "gear_modification", "errors", "operating", "material", "ltca", "impact", "analysis", "optimize")
 
+
 def _names(section: str) -> frozenset[str]:
+    """The keys declared for `section`."""
     return frozenset(k.key for k in declared(section))
 
 

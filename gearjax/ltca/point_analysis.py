@@ -83,7 +83,8 @@ class PointContactLoads(eqx.Module):
         mesh_stiffness: $dT_2/d\\Theta$ (N·mm/rad), shape (pos,).
         semi_major, semi_minor: contact ellipse semi-axes (mm).
         curvature_a, curvature_b: the relative curvatures $A \\le B$ (1/mm) that the Hertz
-            law takes (`relative_curvatures`; edge contacts floored at `MIN_CURVATURE`).
+            law takes (`relative_curvatures`; edge contacts floored at `MIN_CURVATURE`; 1
+            for pairs out of mesh, which carry no load).
         max_pressure: $p_0$ (MPa).
         linear_compliance: $c_k$ (mm/N); hertz_coefficient: $h_k$ (mm/N^(2/3)).
         gaps: rigid gaps $e_k$ (mm); arms: $m_k$ (mm).
@@ -179,9 +180,8 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
 
     Each contact is located between the TCA's face slices by a parabola through three of
-    them, so the slices must be close compared with the width of a point contact's peak:
-    on the seed pair (m_n 4, b 55 mm) the `default` grid (21 slices) is converged to under
-    1 % against 41 slices, and `fast` (9 slices) is not (decision 0009).
+    them, so the slices must be close compared with the width of a point contact's peak
+    (decision 0009 measures which grids converge: the `fast` preset's 9 slices do not).
 
     Args:
         pair: the resolved pair.
@@ -204,17 +204,15 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
-    # the pair axis holds each zone's window in turn (`tca.result.merge_zones`): each zone's
-    # coefficients are evaluated on its own part only
-    n = gaps.shape[-1] // len(zones)
+    # Each zone's coefficients for every pair, then each pair's own zone's: the zones' pair
+    # windows need not be the same length (`tca.merge_zones`), so the axis is not split.
     per_zone = []
-    for i, zone in enumerate(zones):
-        part = slice(i * n, (i + 1) * n)
+    for zone in zones:
         per_zone.append(jnp.vectorize(
             lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
             signature="(),(),(),(),(),(),(3),()->(4)",
-        )(k[:, part], phi1[:, part], u1[:, part], u2[:, part], z[:, part], te[:, part], normal[:, part], frac[:, part]))
-    coefficients = jnp.concatenate(per_zone, axis=1)
+        )(k, phi1, u1, u2, z, te, normal, frac))
+    coefficients = jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
     finite = jnp.isfinite(gaps)
     # pairs out of mesh have no contact: unit coefficients keep their (zero) loads finite
     coefficients = jnp.where(finite[..., None], coefficients, 1.0)
