@@ -7,6 +7,17 @@ compared between grids (`gearjax.ltca.point_analysis`; not yet a stage of `simul
 An accuracy is a preset's name, or `PRESET@PxS`: the preset with P positions per pitch and S
 face slices (to tell the two grids' effects apart).
 
+    python tools/dca_point_contact.py --peak-error 9 21 41 [--accuracy default@32x81]
+
+instead measures how well a parabola through three slices finds a point contact's peak:
+the rigid TCA at the (fine) accuracy gives each contact's slice TE along the face; that
+curve, linearly interpolated, is resampled at the slice spacing of 9, 21, 41 slices (ten
+offsets each) and the parabola's peak (as `closest_contact` fits it) compared with the
+fine curve's largest sample (the rigid TE of this conjugate pair, the largest sample over
+the slices, varies by under 0.004 µm at 41 slices already); one JSON line per slice count:
+the peak error's range (µm along the line of action) over every contact, position and
+offset (`samples`) whose peak lies inside the face.
+
 Prints, per preset, a JSON line: the loaded and unloaded TE peak-to-peak along the line of
 action, the gear's lag and the approach it means, the loads, the pairs' tangent stiffness,
 the mesh stiffness as a normal stiffness (dT/dΘ over the arm squared), the contact ellipse
@@ -85,12 +96,55 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
     }
 
 
+def peak_errors(accuracy: str, slice_counts: list[int]) -> list[dict]:
+    pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
+                                SEED_CASE["face_width"], 0.0)
+    grid = parse_accuracy(accuracy)
+    tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy=grid), throw=False).tca
+    um = 1e3 * float(tca.action_radius[1])
+    n_mid = tca.slice_z.shape[-1] - 2  # the last two slices are the face ends
+    z = np.asarray(tca.slice_z)[:n_mid]
+    order = np.argsort(z)
+    z = z[order]
+    te = np.where(np.asarray(tca.valid), np.asarray(tca.slice_te), -np.inf)[..., :n_mid][..., order] * um
+    curves = [row for row in te.reshape(-1, n_mid) if np.isfinite(row).sum() > 3]
+    rows = []
+    for count in slice_counts:
+        spacing = float(pair.face_width) / count  # slices sit at the middles of equal parts of the face
+        errors = []
+        for row in curves:
+            ok = np.isfinite(row)
+            zs, ts = z[ok], row[ok]
+            top = int(np.argmax(ts))
+            if zs[top] - zs[0] < spacing or zs[-1] - zs[top] < spacing:
+                continue  # a peak at the face end: `closest_contact` takes the end slice there
+            for offset in np.linspace(0.0, spacing, 10, endpoint=False):
+                v = np.interp(np.arange(zs[0] + offset, zs[-1], spacing), zs, ts)
+                j = int(np.argmax(v))
+                if j == 0 or j == v.size - 1:
+                    continue
+                left, here, right = v[j - 1], v[j], v[j + 1]
+                curvature = left - 2.0 * here + right
+                x = np.clip(-(right - left) / (2.0 * curvature), -1.0, 1.0) if curvature < 0 else 0.0
+                errors.append(here + 0.5 * x * (right - left) + 0.5 * x * x * curvature - ts[top])
+        rows.append({"accuracy": accuracy, "face_slices": count, "spacing_mm": round(float(spacing), 3),
+                     "samples": len(errors), "peak_error_um": [round(float(np.min(errors)), 3),
+                                                                round(float(np.max(errors)), 3)]})
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--torque-Nm", type=float, default=100.0)
-    parser.add_argument("--accuracy", nargs="+", default=["fast", "default"])
+    parser.add_argument("--accuracy", nargs="+", default=None)
+    parser.add_argument("--peak-error", type=int, nargs="+", metavar="SLICES",
+                        help="the parabola's peak error at these slice counts, from the first --accuracy's TCA")
     args = parser.parse_args()
-    for accuracy in args.accuracy:
+    if args.peak_error:
+        for row in peak_errors((args.accuracy or ["default@32x81"])[0], args.peak_error):
+            print(json.dumps(row), flush=True)
+        return
+    for accuracy in args.accuracy or ["fast", "default"]:
         print(json.dumps(figures(accuracy, args.torque_Nm)), flush=True)
 
 
