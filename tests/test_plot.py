@@ -4,13 +4,13 @@
 from types import SimpleNamespace
 
 import equinox as eqx
+import matplotlib  # the dev extra installs it: a missing install fails here instead of skipping
 import numpy as np
 import pytest
 
 import gearjax as gj
 from gearjax.optimize import OptimizationResult
 
-matplotlib = pytest.importorskip("matplotlib")  # the dev extra installs it
 matplotlib.use("Agg")
 from gearjax.io import plot  # noqa: E402
 
