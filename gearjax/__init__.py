@@ -48,6 +48,7 @@ from .ltca import (
     IsoCompliance as IsoCompliance,
     LTCAResult as LTCAResult,
     SliceCompliance as SliceCompliance,
+    ToothSectionCompliance as ToothSectionCompliance,
     loaded_contact_analysis as loaded_contact_analysis,
 )
 from .pipeline import (

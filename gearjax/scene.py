@@ -23,7 +23,7 @@ from .geometry._base import EFFECTS, AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
-from .ltca import AbstractCompliance, ContactModel, SliceCompliance
+from .ltca import COMPLIANCE_MODELS, AbstractCompliance, ContactModel, SliceCompliance
 from .tca import pair_window
 from .tca.grid import MAX_PAIRS
 from .operating import OperatingPoint
@@ -44,8 +44,10 @@ class Scene(eqx.Module):
         errors: mesh errors, or None.
         operating: torque and speed.
         material: both gears' material.
-        compliance: LTCA compliance model, any `AbstractCompliance` (`SliceCompliance()`
-            by default, or `IsoCompliance()`).
+        compliance: LTCA compliance model, any `AbstractCompliance` for the pair's family:
+            by default the first of `COMPLIANCE_MODELS` that models it (`SliceCompliance()`
+            for the involute families, `ToothSectionCompliance()` for double-circular-arc
+            gears).
         hub_radius: inner radius of each gear body (mm), shape (2,); it enters the fillet
             foundation ($h_f = r_f/r_\\text{hub}$) and the gear inertias. Default half the
             root radius.
@@ -118,7 +120,7 @@ class Scene(eqx.Module):
         self.errors = errors
         self.operating = operating
         self.material = Material() if material is None else material
-        self.compliance = _compliance(pair, compliance, effects)
+        self.compliance = _compliance(pair, compliance, effects, accuracy)
         self.hub_radius = _hub_radius(pair, hub_radius)
         self.inertia = _inertia(inertia)
         self.effects = effects
@@ -181,9 +183,12 @@ def _effects(pair: AbstractGearPair, operating: OperatingPoint, effects) -> froz
     return effects
 
 
-def _compliance(pair: AbstractGearPair, compliance, effects: frozenset) -> AbstractCompliance:
-    """The compliance model (default `SliceCompliance()`), checked against the family."""
-    compliance = SliceCompliance() if compliance is None else compliance
+def _compliance(pair: AbstractGearPair, compliance, effects: frozenset, accuracy: Accuracy) -> AbstractCompliance:
+    """The compliance model (default: the first of `COMPLIANCE_MODELS` that models the
+    family), checked against the family and, for a loaded scene, against the model's
+    `min_face_slices`."""
+    if compliance is None:
+        compliance = next((model() for model in COMPLIANCE_MODELS if isinstance(pair, model.families)), SliceCompliance())
     if not isinstance(compliance, AbstractCompliance):
         raise ValueError(
             "compliance must be a compliance model (an AbstractCompliance, e.g. IsoCompliance() or "
@@ -193,6 +198,12 @@ def _compliance(pair: AbstractGearPair, compliance, effects: frozenset) -> Abstr
         raise ValueError(
             f"compliance {type(compliance).__name__} models the teeth of "
             f"{', '.join(f.__name__ for f in compliance.families)} only; got {type(pair).__name__}"
+        )
+    if "ltca" in effects and accuracy.face_slices < compliance.min_face_slices:
+        raise ValueError(
+            f"accuracy.face_slices must be at least {compliance.min_face_slices} for the loaded contact of "
+            f"{type(compliance).__name__} (its results do not converge on fewer); got {accuracy.face_slices} "
+            "(use accuracy='default' or finer)"
         )
     return compliance
 

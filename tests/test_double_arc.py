@@ -229,4 +229,4 @@ def test_double_arc_scene_file_and_no_loaded_stages():
     with pytest.raises((SceneFileError, ValueError), match="pressure_angle_deg"):
         scene_from_dict(bad)
     with pytest.raises(ValueError, match="not available"):
-        Scene(SEED_PAIR, operating=OperatingPoint(torque=100.0))
+        Scene(SEED_PAIR, operating=OperatingPoint(torque=100.0), effects=("impact",))

@@ -18,7 +18,7 @@ from gearjax.geometry import (
     DoubleArcZone,
     InvoluteGearPair,
 )
-from gearjax.ltca import AbstractCompliance, IsoCompliance, SliceCompliance
+from gearjax.ltca import AbstractSliceCompliance, IsoCompliance, SliceCompliance
 
 FAMILIES = (InvoluteGearPair, CurvilinearGearPair, DoubleArcGearPair, DoubleArcZone)
 
@@ -105,16 +105,20 @@ def test_gradient_through_resolve_matches_finite_difference():
 
 def test_scene_checks_declared_stages():
     pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
-    assert pair.supported_effects == frozenset()
+    assert pair.supported_effects == frozenset({"ltca"})
     with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state.*four-state"):
-        gj.Scene(pair, effects=("ltca",), operating=gj.OperatingPoint(torque=1.0e5))
+        gj.Scene(pair, effects=("impact",), operating=gj.OperatingPoint(torque=1.0e5))
+
+    class RigidOnly:
+        supported_effects = frozenset()
+
     # the stage itself reads the same declaration (it refuses before using its other inputs)
-    with pytest.raises(ValueError, match="DoubleArcGearPair supports the rigid TCA only"):
-        gj.loaded_contact_analysis(pair, None, 1.0e5, None)
+    with pytest.raises(ValueError, match="RigidOnly supports the rigid TCA only"):
+        gj.loaded_contact_analysis(RigidOnly(), None, 1.0e5, None)
 
 
 def test_any_abstract_compliance_is_accepted_and_others_refused(spur_pair):
-    class Stiff(AbstractCompliance):
+    class Stiff(AbstractSliceCompliance):
         families = (AbstractInvolutePair,)
 
         def __call__(self, *args):

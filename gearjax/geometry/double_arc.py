@@ -77,8 +77,8 @@ class DoubleArcGearPair(AbstractGearPair):
     rack: GBT12759Rack = eqx.field(static=True)
     derived: dict[str, Array] | None
 
-    #: Point contact: loaded contact is not implemented (rigid TCA only).
-    supported_effects: ClassVar[frozenset[str]] = frozenset()
+    #: Point contact: loaded contact (`gearjax.ltca.point_analysis`); no impact yet.
+    supported_effects: ClassVar[frozenset[str]] = frozenset({"ltca"})
     effects_note: ClassVar[str] = EFFECTS_NOTE
     scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
         "double_circular_arc", "double-circular-arc gear pair (GB/T 12759)",

@@ -25,10 +25,10 @@ from .double_arc_rack import CONCAVE, CONVEX
 if TYPE_CHECKING:
     from .double_arc import DoubleArcGearPair
 
-#: Why a double-circular-arc pair supports no loaded effect (`supported_effects` is empty).
+#: What a double-circular-arc pair lacks (`supported_effects` holds the loaded contact only).
 EFFECTS_NOTE = (
-    "loaded contact of point-contact gears is not implemented; use the rigid TCA (no "
-    "torque) and gearjax.papers.four_state for the seed's four-state impact model"
+    "the mesh-in impact of point-contact gears is not implemented; use the loaded contact "
+    "(a torque, no 'impact') and gearjax.papers.four_state for the seed's four-state impact model"
 )
 
 
@@ -49,7 +49,7 @@ class DoubleArcZone(AbstractFlankPair):
     conjugate_slices: ClassVar[bool] = False
     screen_edges: ClassVar[bool] = False
     linear_lead: ClassVar[bool] = True
-    supported_effects: ClassVar[frozenset[str]] = frozenset()
+    supported_effects: ClassVar[frozenset[str]] = frozenset({"ltca"})
     effects_note: ClassVar[str] = EFFECTS_NOTE
     #: Half-width (rad of pinion rotation) of the window around the contact instant in
     #: which a slice of a tooth pair is analysed (~0.1 rad holds every slice whose gap is

@@ -68,6 +68,13 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
     rb2 = _f(ltca.action_radius[1])
     lte = np.asarray(ltca.transmission_error)
     share = np.asarray(ltca.load_share)
+    point = {}
+    if ltca.point_contact is not None:
+        contact = ltca.point_contact
+        heaviest = np.unravel_index(np.argmax(np.asarray(contact.loads)), np.shape(contact.loads))
+        point = {"contact_ellipse_semi_axes_mm": [float(np.asarray(contact.semi_major)[heaviest]),
+                                                  float(np.asarray(contact.semi_minor)[heaviest])],
+                 "max_pair_load_N": float(np.asarray(contact.loads)[heaviest])}
     return {
         "compliance": type(scene.compliance).__name__,
         "extended_contact": scene.extended_contact,
@@ -85,7 +92,7 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
         "load_share_per_pair": [_list(row) for row in share.T],
         "converged": bool(np.all(np.asarray(ltca.converged))),
         "result": enum_name(ltca.result),
-    }
+    } | point
 
 
 def impact_dict(scene: Scene, result: SimulationResult) -> dict:
@@ -196,6 +203,10 @@ def summary(out: dict) -> str:
             f"  mean mesh stiffness        = {lt['mean_mesh_stiffness_N_per_mm_um']:.3f} N/(mm µm) per face width",
             f"  max load share             = {lt['max_load_share']:.3f}, max Hertz pressure {lt['max_pressure_MPa']:.0f} MPa",
         ]
+        if "contact_ellipse_semi_axes_mm" in lt:
+            a, b = lt["contact_ellipse_semi_axes_mm"]
+            lines.append(f"  contact ellipse            = {a:.3f} × {b:.3f} mm semi-axes under the largest pair load, "
+                         f"{lt['max_pair_load_N']:.0f} N")
         if lt["result"] != "successful":
             lines.append(f"  warning: {enum_message(getattr(RESULTS, lt['result']))}")
     if "impact" in out:

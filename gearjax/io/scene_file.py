@@ -143,7 +143,7 @@ def scene_from_dict(data: dict) -> Scene:
     errors = _errors_from(data)
     operating = _operating_from(data)
     material = _material_from(data)
-    compliance, hub_radius, extended = _ltca_from(data.get("ltca", {}))
+    compliance, hub_radius, extended = _ltca_from(data.get("ltca", {}), pair)
     inertia = _inertia_from(data.get("impact", {}))
     accuracy, effects, pitches = _analysis_from(data.get("analysis", {}))
     return _build(
@@ -300,11 +300,13 @@ def _material_from(data: dict):
     return _build("material", Material, **{k: _number("material", k, v) for k, v in table.items()})
 
 
-def _ltca_from(ltca: dict):
-    """[ltca]: (compliance model, hub radius or None, extended_contact)."""
+def _ltca_from(ltca: dict, pair):
+    """[ltca]: (compliance model, hub radius or None, extended_contact); the compliance
+    model by default the first of `COMPLIANCE_MODELS` that models `pair`'s family."""
     _unknown("ltca", ltca, _LTCA_KEYS)
     by_name = {cls.scene_file.family: cls for cls in COMPLIANCE_MODELS}
-    kind = ltca.get("compliance", COMPLIANCE_MODELS[0].scene_file.family)
+    default = next((cls for cls in COMPLIANCE_MODELS if isinstance(pair, cls.families)), COMPLIANCE_MODELS[0])
+    kind = ltca.get("compliance", default.scene_file.family)
     if not isinstance(kind, str) or kind not in by_name:
         raise _fail("ltca.compliance", f"must be {' or '.join(repr(name) for name in by_name)}; got {kind!r}")
     spec = by_name[kind].scene_file

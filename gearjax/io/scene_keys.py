@@ -119,11 +119,13 @@ def _ltca_keys() -> tuple[SceneKey, ...]:
     slice_model = COMPLIANCE_MODELS[0]
     fields = {f.name: f.default for f in dataclasses.fields(slice_model)}
     return (
-        SceneKey("compliance", "", COMPLIANCE_MODELS[0].scene_file.family, "tooth compliance model: "
+        SceneKey("compliance", "", None, "tooth compliance model: "
                  + "; ".join(f"`{m.scene_file.family}`, {m.scene_file.description}" for m in COMPLIANCE_MODELS),
-                 choices=tuple(m.scene_file.family for m in COMPLIANCE_MODELS)),
+                 choices=tuple(m.scene_file.family for m in COMPLIANCE_MODELS),
+                 absent="the family's: `slice` for involute and curvilinear pairs, `point` for double-circular-arc pairs"),
         SceneKey("coupling_length_mn", "m_n", fields["coupling_length"],
-                 "decay length of the face-width coupling (`slice` only)", (0.0, 50.0, True, True)),
+                 "decay length of a point load along the face (`slice` and `point`)", (0.0, 50.0, True, True),
+                 allowed="positive for `point`"),
         SceneKey("hertz", "", fields["hertz"], "contact law of a slice: line contact (Palmgren) or linear (`slice` only)",
                  choices=HERTZ_LAWS),
         SceneKey("hub_radius", "mm", None, "radius where the tooth's body is clamped (foundation)", absent="half the root radius",

@@ -30,6 +30,7 @@ from ..tca import ContactKind, TCAResult
 from ..units import Material
 from .hertz_point import effective_modulus
 from .model import ContactModel
+from .point_analysis import PointContactLoads, ToothSectionCompliance, point_contact_analysis
 from .solver import NO_CONTACT, ContactProblem, solve_with
 
 class LTCAResult(eqx.Module):
@@ -58,6 +59,10 @@ class LTCAResult(eqx.Module):
         face_width: $b$ (mm).
         result: `RESULTS.successful`, or `RESULTS.ltca_unconverged` where the solve did
             not converge at some position (`converged` tells which).
+        point_contact: for point-contact flanks (`ToothSectionCompliance`), each pair's
+            contact in full (`PointContactLoads`: ellipse, curvatures, compliances, its
+            position between the slices); None for line contact. The slice fields then
+            hold each pair's contact at the face slice nearest to it.
     """
 
     pinion_angle: Float[Array, " pos"]
@@ -75,6 +80,7 @@ class LTCAResult(eqx.Module):
     action_radius: Float[Array, "2"]
     face_width: Scalar
     result: RESULTS
+    point_contact: PointContactLoads | None = None
 
     @property
     def transmission_error_line(self):
@@ -244,6 +250,8 @@ def loaded_contact_analysis(
             f"{type(pair).__name__} supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
         )
     pair = pair.resolve()
+    if isinstance(model.compliance, ToothSectionCompliance):
+        return _point_loaded(pair, tca, torque, model, active_pairs, rates)
     n_mid = model.accuracy.face_slices
     valid, weights = _loaded_slices(pair, tca, model, active_pairs)
     with jax.named_scope("ltca_compliance"):
@@ -271,6 +279,49 @@ def loaded_contact_analysis(
         action_radius=pair.action_radii(),
         face_width=pair.face_width,
         result=first_failure((~jnp.all(sol.converged), RESULTS.ltca_unconverged)),
+    )
+
+
+def _point_loaded(pair, tca: TCAResult, torque, model: ContactModel, active_pairs, rates: bool) -> LTCAResult:
+    """The LTCA of point-contact flanks (`point_contact_analysis`), in the slice layout of
+    `LTCAResult`: each pair's load, pressure and loaded gap at the face slice nearest its
+    contact; $\\mathrm d\\Theta/\\mathrm dT$ by forward differentiation when `rates`."""
+    n_mid = model.accuracy.face_slices
+    ratio = pair.teeth[1] / pair.teeth[0]
+
+    def solve(t):
+        result = point_contact_analysis(pair, tca, t, model.material, model.compliance.coupling_length,
+                                        active_pairs=active_pairs)
+        return result.rotation, result
+
+    torque = jnp.asarray(torque, dtype=tca.transmission_error.dtype)
+    if rates:
+        rotation, rotation_rate, point = jax.jvp(solve, (torque,), (jnp.ones_like(torque),), has_aux=True)
+    else:
+        (rotation, point), rotation_rate = solve(torque), None
+    nearest = jnp.argmin(jnp.abs(point.axial_position[..., None] - tca.slice_z[:n_mid]), axis=-1)
+    at_contact = (jnp.arange(n_mid) == nearest[..., None]) & jnp.isfinite(point.gaps)[..., None]
+    on_slices = lambda x, empty=0.0: jnp.where(at_contact, x[..., None], empty)  # noqa: E731
+    loaded_gap = jnp.maximum(point.gaps - point.arms * rotation[:, None], 0.0)
+    total = jnp.sum(point.arms * point.loads, axis=-1)
+    converged = jnp.abs(total - torque * ratio) <= 1e-8 * jnp.maximum(torque * ratio, 1.0)
+    return LTCAResult(
+        pinion_angle=tca.pinion_angle,
+        torque=torque,
+        transmission_error=point.transmission_error,
+        unloaded_transmission_error=tca.transmission_error,
+        rotation=rotation,
+        rotation_rate=rotation_rate,
+        loads=on_slices(point.loads),
+        gaps=on_slices(jnp.where(jnp.isfinite(loaded_gap), loaded_gap, NO_CONTACT), NO_CONTACT),
+        pressure=on_slices(point.max_pressure),
+        converged=converged,
+        pair_index=tca.pair_index,
+        slice_z=tca.slice_z[..., :n_mid],
+        action_radius=pair.action_radii(),
+        face_width=pair.face_width,
+        result=first_failure((~jnp.all(converged), RESULTS.ltca_unconverged)),
+        point_contact=point,
     )
 
 

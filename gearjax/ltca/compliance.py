@@ -91,17 +91,27 @@ def _slice_lengths(tca: TCAResult, n_mid: int):
 
 
 class AbstractCompliance(eqx.Module):
-    """A compliance model: the influence matrix of the contact points of every position.
+    """A compliance model of the loaded teeth: `AbstractSliceCompliance` for line contact
+    (an influence matrix of the face slices' points), or a point-contact model
+    (`gearjax.ltca.point_analysis.ToothSectionCompliance`).
 
     Attributes:
         families: the pair families whose teeth the model describes (class variable);
             `Scene` refuses a loaded scene of any other family.
         scene_file: how scene files name it in `[ltca]` (a `SceneFileSpec`: the value of
             `compliance = "..."`, its description, its option keys), or None.
+        min_face_slices: the fewest face slices (`Accuracy.face_slices`) at which the
+            model's results converge (class variable); `Scene` refuses a coarser loaded scene.
     """
 
     families: AbstractClassVar[tuple[type, ...]]
     scene_file: ClassVar[SceneFileSpec | None] = None
+    min_face_slices: ClassVar[int] = 1
+
+
+class AbstractSliceCompliance(AbstractCompliance):
+    """A line-contact compliance model: the influence matrix of the contact points (tooth
+    pair, face slice) of every position."""
 
     @abc.abstractmethod
     def __call__(
@@ -120,7 +130,7 @@ class AbstractCompliance(eqx.Module):
         """
 
 
-class IsoCompliance(AbstractCompliance):
+class IsoCompliance(AbstractSliceCompliance):
     """Uniform line stiffness from ISO 6336-1 method B (see the module docstring).
 
     Call with `(pair, material, hub_radius, tca, n_mid, quadrature, weights)`; `weights`
@@ -218,7 +228,7 @@ def symmetric_tridiagonal_inverse(diag, off):
     return product * jnp.where(upper, inverse_diag[None, :], inverse_diag[:, None])
 
 
-class SliceCompliance(AbstractCompliance):
+class SliceCompliance(AbstractSliceCompliance):
     """Potential-energy slices with a shear-layer coupling and Hertz contact.
 
     Attributes:

@@ -23,13 +23,19 @@ families.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .._custom_types import Array, ArrayLike, Float
+from .._custom_types import Array, ArrayLike, Bool, Float
+from .._validate import check_range
+from ..geometry._base import SceneFileSpec
+from ..geometry.double_arc import DoubleArcGearPair
 from ..tca import TCAResult
 from ..units import Material
+from .compliance import AbstractCompliance
 from .hertz_point import effective_modulus, hertz_point_contact, relative_curvatures
 from .point_contact import point_load_compliance, section_compliance, share_load
 
@@ -38,6 +44,34 @@ SECTION_SAMPLES = 200
 #: Floor of the relative curvatures $A$, $B$ (mm⁻¹): an edge contact's flank curvatures can
 #: vanish or change sign; the floor is a relative radius of 50 m.
 MIN_CURVATURE = 1e-5
+
+
+class ToothSectionCompliance(AbstractCompliance):
+    """The point-contact model of this module for double-circular-arc teeth: each tooth's
+    generated transverse section as a cantilever, a point load spread along the face with
+    the decay length $\\lambda$, and the Hertz point contact of the two flanks.
+
+    The contact is located between the TCA's face slices by a parabola, which converges
+    from 21 slices on (decision 0009: the peak's error is −1.8…+13.9 µm at 9 slices,
+    −0.16…+0.07 µm at 21), so a loaded scene needs at least `min_face_slices`.
+
+    Attributes:
+        coupling_length: decay length $\\lambda$ of a point load along the face, in units
+            of the normal module (default 1.1, as `SliceCompliance`).
+    """
+
+    families: ClassVar[tuple[type, ...]] = (DoubleArcGearPair,)
+    scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
+        "point", "point contact: tooth-section bending and shear, Hertz point contact",
+        {"coupling_length_mn": ("coupling_length", "number", "m_n", 1.0)},
+        required=(),
+    )
+    min_face_slices: ClassVar[int] = 21
+
+    coupling_length: float = eqx.field(static=True, default=1.1)
+
+    def __check_init__(self):
+        check_range("coupling_length", self.coupling_length, 0.0, 50.0, unit="m_n", low_inclusive=False)
 
 
 class ToothSection(eqx.Module):
@@ -89,6 +123,7 @@ class PointContactLoads(eqx.Module):
         linear_compliance: $c_k$ (mm/N); hertz_coefficient: $h_k$ (mm/N^(2/3)).
         gaps: rigid gaps $e_k$ (mm); arms: $m_k$ (mm).
         slice_index: the TCA slice of each pair's contact.
+        axial_position: the contact's $z$ between the slices (mm).
     """
 
     rotation: Float[Array, " pos"]
@@ -106,6 +141,7 @@ class PointContactLoads(eqx.Module):
     gaps: Float[Array, "pos pair"]
     arms: Float[Array, "pos pair"]
     slice_index: Array
+    axial_position: Float[Array, "pos pair"]
 
 
 def _tooth_frame_normal(zone, gear, u):
@@ -176,7 +212,8 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
 
 def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material = Material(),
                            coupling_length_mn: float = 1.1,
-                           sections: tuple[ToothSection, ToothSection] | None = None) -> PointContactLoads:
+                           sections: tuple[ToothSection, ToothSection] | None = None,
+                           active_pairs: Bool[Array, " pair"] | None = None) -> PointContactLoads:
     """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
 
     Each contact is located between the TCA's face slices by a parabola through three of
@@ -191,6 +228,7 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
         coupling_length_mn: the decay length $\\lambda$ of a point load along the face, in
             $m_n$ (as `SliceCompliance`).
         sections: the two teeth's `ToothSection`s; sampled from the pair if None.
+        active_pairs: optional mask over the TCA's tooth pairs; the others carry no load.
 
     Returns:
         `PointContactLoads`.
@@ -201,6 +239,8 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     decay_length = coupling_length_mn * pair.normal_module
     contact = closest_contact(tca)
     j, gaps, u1, u2, z, te, frac = (contact[name] for name in ("slice", "gap", "u1", "u2", "z", "te", "frac"))
+    if active_pairs is not None:
+        gaps = jnp.where(active_pairs, gaps, jnp.inf)
     normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
@@ -241,4 +281,5 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
         gaps=gaps,
         arms=arms,
         slice_index=j,
+        axial_position=z,
     )

@@ -1,0 +1,106 @@
+"""The loaded contact of a double-circular-arc pair through the stage chain: a scene file
+with a torque, run by `gearjax run --no-cache` and by `simulate` (one compiled program:
+`simulate`'s, which the command compiles without its program cache), its slice layout against its own point contacts, and the
+scene's checks (`ToothSectionCompliance.min_face_slices`, no impact yet)."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+
+import numpy as np
+import pytest
+
+import gearjax as gj
+from gearjax.cli import main
+from gearjax.io.scene_file import SceneFileError, scene_from_dict
+from gearjax.papers.double_arc import SEED_CASE
+
+SCENE = f"""[pair]
+family = "double_circular_arc"
+teeth = [{SEED_CASE["teeth"][0]}, {SEED_CASE["teeth"][1]}]
+normal_module = {SEED_CASE["normal_module"]}
+helix_angle_deg = {SEED_CASE["helix_angle_deg"]}
+face_width = {SEED_CASE["face_width"]}
+
+[operating]
+torque_Nm = 100.0
+"""
+
+
+def _pair():
+    return gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
+                                SEED_CASE["face_width"], 0.0)
+
+
+@pytest.fixture(scope="module")
+def loaded(tmp_path_factory):
+    path = tmp_path_factory.mktemp("dca") / "dca.toml"
+    path.write_text(SCENE)
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):  # without the program cache: simulate's own program, then shared
+        assert main(["run", str(path), "--json", "--no-cache"]) == 0
+    import tomllib
+
+    scene = scene_from_dict(tomllib.loads(SCENE))
+    return scene, gj.simulate(scene), json.loads(buffer.getvalue())
+
+
+def test_the_command_line_runs_a_loaded_scene(loaded):
+    scene, result, out = loaded
+    assert isinstance(scene.compliance, gj.ToothSectionCompliance) and scene.effects == frozenset({"ltca"})
+    lt = out["ltca"]
+    assert lt["compliance"] == "ToothSectionCompliance" and lt["converged"] and lt["result"] == "successful"
+    assert lt["lte_peak_to_peak_um"] == pytest.approx(float(result.ltca.lte_peak_to_peak_line) * 1e3, rel=1e-9)
+    major, minor = lt["contact_ellipse_semi_axes_mm"]
+    assert major > minor > 0.0
+    assert lt["max_pair_load_N"] == pytest.approx(float(np.max(result.ltca.point_contact.loads)), rel=1e-12)
+
+
+def test_each_pair_loads_the_slice_nearest_its_contact(loaded):
+    """The slice layout holds each pair's point load once, at the face slice nearest the
+    contact's axial position, and the loads carry the torque."""
+    scene, result, _ = loaded
+    ltca, point = result.ltca, result.ltca.point_contact
+    loads = np.asarray(ltca.loads)
+    assert ((loads > 0).sum(axis=-1) <= 1).all()
+    np.testing.assert_allclose(loads.sum(axis=-1), np.asarray(point.loads), rtol=0, atol=0)
+    on = np.asarray(point.loads) > 0
+    nearest = np.argmin(np.abs(np.asarray(point.axial_position)[..., None] - np.asarray(ltca.slice_z)), axis=-1)
+    np.testing.assert_array_equal(np.argmax(loads, axis=-1)[on], nearest[on])
+    pair = scene.pair
+    gear_torque = float(scene.operating.torque) * pair.teeth[1] / pair.teeth[0]
+    np.testing.assert_allclose(np.sum(np.asarray(point.arms * point.loads), axis=-1), gear_torque, rtol=1e-9)
+    assert (np.asarray(ltca.pressure)[loads > 0] > 0).all() and (np.asarray(ltca.pressure)[loads == 0] == 0).all()
+
+
+def test_the_rotation_rate_is_the_inverse_mesh_stiffness(loaded):
+    """dΘ/dT1 by forward differentiation through the load sharing equals (z2/z1) over the
+    pairs' summed stiffness Σ m_k² dF_k/dδ_k: two separate computations."""
+    scene, result, _ = loaded
+    ratio = scene.pair.teeth[1] / scene.pair.teeth[0]
+    np.testing.assert_allclose(result.ltca.rotation_rate, ratio / result.ltca.point_contact.mesh_stiffness, rtol=1e-8)
+    np.testing.assert_allclose(result.ltca.transmission_error, result.tca.transmission_error - result.ltca.rotation,
+                               rtol=0, atol=1e-15)
+
+
+def test_the_scene_refuses_coarse_slices_the_impact_and_line_compliance():
+    pair = _pair()
+    torque = gj.OperatingPoint(torque=1.0e5)
+    with pytest.raises(ValueError, match=r"accuracy.face_slices must be at least 21 .*ToothSectionCompliance.*got 9"):
+        gj.Scene(pair, operating=torque, accuracy="fast")
+    assert gj.Scene(pair, accuracy="fast").effects == frozenset()  # the rigid TCA needs no more slices
+    with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state"):
+        gj.Scene(pair, operating=torque, effects=("impact",))
+    with pytest.raises(ValueError, match="models the teeth of AbstractInvolutePair only"):
+        gj.Scene(pair, operating=torque, compliance=gj.SliceCompliance())
+    with pytest.raises(ValueError, match="coupling_length"):
+        gj.ToothSectionCompliance(coupling_length=0.0)
+    import tomllib
+
+    data = tomllib.loads(SCENE)
+    assert scene_from_dict(data).compliance == gj.ToothSectionCompliance()
+    assert scene_from_dict(dict(data, ltca={"coupling_length_mn": 2.0})).compliance.coupling_length == 2.0
+    with pytest.raises((SceneFileError, ValueError), match=r"\[ltca\] hertz: applies to compliance = 'slice' only"):
+        scene_from_dict(dict(data, ltca={"hertz": "linear"}))
