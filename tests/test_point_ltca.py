@@ -1,7 +1,8 @@
 """The loaded contact of a double-circular-arc pair through the stage chain: a scene file
 with a torque, run by `gearjax run --no-cache` and by `simulate` (one compiled program:
-`simulate`'s, which the command compiles without its program cache), its slice layout against its own point contacts, and the
-scene's checks (`ToothSectionCompliance.min_face_slices`, no impact yet)."""
+`simulate`'s, which the command compiles without its program cache), its slice layout
+against its own point contacts, and the scene's checks
+(`ToothSectionCompliance.min_face_slices`, no impact yet)."""
 
 from __future__ import annotations
 
@@ -104,3 +105,32 @@ def test_the_scene_refuses_coarse_slices_the_impact_and_line_compliance():
     assert scene_from_dict(dict(data, ltca={"coupling_length_mn": 2.0})).compliance.coupling_length == 2.0
     with pytest.raises((SceneFileError, ValueError), match=r"\[ltca\] hertz: applies to compliance = 'slice' only"):
         scene_from_dict(dict(data, ltca={"hertz": "linear"}))
+
+
+@pytest.mark.parametrize("error_um", [50.0, -50.0])
+def test_the_axial_pitch_errors_loaded_effect_is_the_rigid_one_at_light_load(loaded, error_um):
+    """An axial pitch error Δα changes the loaded TE at 1 N·m as it changes the rigid TE,
+    with the same sign, up to the pairs' deflection at that load (LTE = TE − Θ with
+    0 ≤ Θ), which is an order smaller than the change; at 100 N·m the load sharing makes
+    the loaded TE's peak-to-peak smaller than the rigid one. Same program as the fixture's
+    (Δα and the torque are array leaves; the pair window is the fixture's)."""
+    scene, _, _ = loaded
+
+    def run(error_mm, torque):
+        pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
+                                    SEED_CASE["face_width"], error_mm)
+        result = gj.simulate(gj.Scene(pair, operating=gj.OperatingPoint(torque=torque), pairs=scene.pairs))
+        radius = float(result.ltca.action_radius[1]) * 1e3  # µm per rad
+        return (np.asarray(result.tca.transmission_error) * radius, np.asarray(result.ltca.transmission_error) * radius,
+                np.asarray(result.ltca.rotation) * radius)
+
+    te0, lte0, lag0 = run(0.0, 1.0e3)
+    te, lte, lag = run(error_um * 1e-3, 1.0e3)
+    rigid, loaded_change = te - te0, lte - lte0
+    deflection = max(np.max(lag0), np.max(lag))
+    assert np.ptp(rigid) > 1.0  # µm: the error matters for the rigid TE
+    assert deflection < 0.1 * np.max(np.abs(rigid))
+    assert np.max(np.abs(loaded_change - rigid)) <= deflection
+    assert np.sign(np.mean(loaded_change)) == np.sign(np.mean(rigid)) != 0
+    te_heavy, lte_heavy, _ = run(error_um * 1e-3, 1.0e5)
+    assert np.ptp(lte_heavy) < np.ptp(te_heavy)

@@ -14,6 +14,9 @@ problem (`solver.py`) gives the loads and the gear's extra lag $\Theta$. Results
   (N/(mm·µm)); $\Theta$ counts from the first rigid contact, so for modified flanks the
   secant value includes the closing of their gaps.
 
+Point-contact flanks (double-circular-arc gears, `ToothSectionCompliance`) are solved per
+tooth pair instead (`point_analysis`) and reported in the same layout.
+
 Everything is batched over positions (and, through `vmap`, over loads) in one program.
 """
 
@@ -228,9 +231,11 @@ def loaded_contact_analysis(
     """LTCA of `pair` at pinion torque `torque` (N·mm) on the positions of `tca`.
 
     Args:
-        pair: the gear pair, of a family with "ltca" in its `supported_effects` (line
-            contact of involute sections, whose transverse radius of curvature at roll
-            length $s$ is $s$ itself, used for the Hertz pressure).
+        pair: the gear pair, of a family with "ltca" in its `supported_effects`: line
+            contact of involute sections (whose transverse radius of curvature at roll
+            length $s$ is $s$ itself, used for the Hertz pressure) with an
+            `AbstractSliceCompliance`, or point contact with `ToothSectionCompliance`
+            (`point_contact_analysis`; the result's `point_contact` holds the contacts).
         tca: its unloaded contact (`tooth_contact_analysis`).
         torque: pinion torque (N·mm), scalar; `vmap` for several loads.
         model: compliance, material, hub radii, accuracy and `extended_contact`
