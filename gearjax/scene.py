@@ -199,13 +199,20 @@ def _compliance(pair: AbstractGearPair, compliance, effects: frozenset, accuracy
             f"compliance {type(compliance).__name__} models the teeth of "
             f"{', '.join(f.__name__ for f in compliance.families)} only; got {type(pair).__name__}"
         )
-    if "ltca" in effects and accuracy.face_slices < compliance.min_face_slices:
+    if "ltca" in effects:
+        check_face_slices(compliance, accuracy)
+    return compliance
+
+
+def check_face_slices(compliance: AbstractCompliance, accuracy: Accuracy) -> None:
+    """Raise `ValueError` where `accuracy` has fewer face slices than the loaded contact of
+    `compliance` needs (`AbstractCompliance.min_face_slices`)."""
+    if accuracy.face_slices < compliance.min_face_slices:
         raise ValueError(
             f"accuracy.face_slices must be at least {compliance.min_face_slices} for the loaded contact of "
             f"{type(compliance).__name__} (its results do not converge on fewer); got {accuracy.face_slices} "
             "(use accuracy='default' or finer)"
         )
-    return compliance
 
 
 def _hub_radius(pair: AbstractGearPair, hub_radius) -> jax.Array:
