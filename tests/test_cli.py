@@ -242,16 +242,6 @@ def test_curvilinear_scene_file_and_reproduce(tmp_path, capsys):
         assert row["length_mm"] == pytest.approx(row["closed_form_length_mm"], rel=1e-4)
 
 
-def test_reproduce_dca_json(capsys):
-    assert main(["reproduce", "dca", "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
-    for v in out["formula_27_mm"].values():
-        assert round(v["gearjax"], 2) == pytest.approx(v["paper"], abs=1e-9)
-    for t in ("table1", "table2"):
-        for paper, ours in zip(out["tables_paper_units"][t]["paper"], out["tables_paper_units"][t]["gearjax"]):
-            assert ours == pytest.approx(paper, rel=3e-4)
-
-
 def test_commands_use_the_persistent_cache_unless_told_not_to(tmp_path):
     """In a fresh process (where JAX has not yet decided on its cache), `optimize` and `run`
     turn JAX's persistent compilation cache on for their run, `--no-cache` turns it off; and each

@@ -137,3 +137,46 @@ def test_the_axial_pitch_errors_loaded_effect_is_the_rigid_one_at_light_load(loa
     assert np.sign(np.mean(loaded_change)) == np.sign(np.mean(rigid)) != 0
     te_heavy, lte_heavy, _ = run(error_um * 1e-3, 1.0e5)
     assert np.ptp(lte_heavy) < np.ptp(te_heavy)
+
+
+def test_reproduce_dca_json(loaded, capsys):
+    """`gearjax reproduce dca --json`: formula (27) and Tables 1–2 as the seed prints them,
+    and our meshing stiffness beside the paper's row (the loaded program of the module's
+    fixture: the seed pair at 100 N·m, the same scene structure), with formula (7)'s
+    forces scaling as the square root of the stiffness."""
+    assert main(["reproduce", "dca", "--json", "--no-cache"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for v in out["formula_27_mm"].values():
+        assert round(v["gearjax"], 2) == pytest.approx(v["paper"], abs=1e-9)
+    for t in ("table1", "table2"):
+        for paper, ours in zip(out["tables_paper_units"][t]["paper"], out["tables_paper_units"][t]["gearjax"]):
+            assert ours == pytest.approx(paper, rel=3e-4)
+    ours, paper = out["mesh_stiffness_N_per_mm"], out["paper_mesh_stiffness_N_per_mm"]
+    assert paper == [1.8084e6, 7.685e5, 1.771e6, 7.1088e5]
+    assert len(ours) == 4 and all(np.isfinite(ours)) and min(ours) > 0
+    for t in ("table1", "table2"):
+        with_ours, seed = out["tables_with_our_stiffness_paper_units"][t]["gearjax"], out["tables_paper_units"][t]["gearjax"]
+        np.testing.assert_allclose(np.asarray(with_ours) / np.asarray(seed), np.sqrt(np.asarray(ours) / np.asarray(paper)),
+                                   rtol=1e-12)
+
+
+def test_the_meshing_stiffness_is_the_meshs_at_each_hand_over(loaded):
+    """`meshing_stiffness`: one hand-over of each kind per zone and cycle, at angles inside
+    the cycle's pitch; K there lies within the range of the mesh stiffness seen along that
+    zone's pairs' normals over the cycle (dT2/dΘ / m_k² of its loaded pairs), up to 5 % for the
+    linear extrapolation over one grid step."""
+    from gearjax.papers.double_arc import STIFFNESS_COLUMNS, meshing_stiffness, seed_pair
+
+    _, result, _ = loaded
+    k = meshing_stiffness(seed_pair())
+    np.testing.assert_array_equal(k.events, [1, 1, 1, 1])
+    angle = np.asarray(result.tca.pinion_angle)
+    pitch = 2 * np.pi / 24
+    assert (np.asarray(k.pinion_angle) >= angle[0] - 1e-12).all() and (np.asarray(k.pinion_angle) < angle[0] + pitch).all()
+    point = result.ltca.point_contact
+    seen = np.asarray(point.mesh_stiffness)[:, None] / np.asarray(point.arms) ** 2
+    loaded_pairs = np.asarray(point.loads) > 0
+    zone = np.asarray(result.tca.pair_zone)
+    for value, (z, _) in zip(np.asarray(k.stiffness), STIFFNESS_COLUMNS):
+        along = seen[loaded_pairs & (zone == z)[None, :]]
+        assert along.min() * 0.95 <= value <= along.max() * 1.05
