@@ -215,7 +215,7 @@ def test_four_state_speed_input(kwargs, match):
         four_state_impact(SEED_PAIR, 0.1, **kwargs)
 
 
-def test_double_arc_scene_file_and_no_loaded_stages():
+def test_double_arc_scene_file_and_no_impact_stage():
     from gearjax.scene import OperatingPoint, Scene
     from gearjax.io.scene_file import SceneFileError, scene_from_dict
 

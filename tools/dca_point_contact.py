@@ -1,6 +1,6 @@
 """Loaded point contact of the double-circular-arc seed pair (m_n 4, z 24/24, b 55 mm,
 β 15°) at a pinion torque, at one or more accuracy presets, so that the figures can be
-compared between grids (`gearjax.ltca.point_analysis`; not yet a stage of `simulate`).
+compared between grids (`gearjax.ltca.point_analysis`, the `ltca` stage of this family).
 
     python tools/dca_point_contact.py [--torque-Nm 100] [--accuracy fast default default@64x41]
 

@@ -49,8 +49,10 @@ class DoubleArcZone(AbstractFlankPair):
     conjugate_slices: ClassVar[bool] = False
     screen_edges: ClassVar[bool] = False
     linear_lead: ClassVar[bool] = True
-    supported_effects: ClassVar[frozenset[str]] = frozenset({"ltca"})
-    effects_note: ClassVar[str] = EFFECTS_NOTE
+    #: A zone alone has no loaded contact: the pair's loaded contact shares the torque
+    #: between both zones' pairs (`gearjax.ltca.point_analysis`).
+    supported_effects: ClassVar[frozenset[str]] = frozenset()
+    effects_note: ClassVar[str] = "load the DoubleArcGearPair, whose loaded contact covers both zones"
     #: Half-width (rad of pinion rotation) of the window around the contact instant in
     #: which a slice of a tooth pair is analysed (~0.1 rad holds every slice whose gap is
     #: below ~1.5 mm of pitch-circle arc).

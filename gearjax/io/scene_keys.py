@@ -128,9 +128,11 @@ def _ltca_keys() -> tuple[SceneKey, ...]:
                  allowed="positive for `point`"),
         SceneKey("hertz", "", fields["hertz"], "contact law of a slice: line contact (Palmgren) or linear (`slice` only)",
                  choices=HERTZ_LAWS),
-        SceneKey("hub_radius", "mm", None, "radius where the tooth's body is clamped (foundation)", absent="half the root radius",
+        SceneKey("hub_radius", "mm", None, "inner radius of the gear bodies: the fillet foundation's (`slice`) and the "
+                 "impact's inertias", absent="half the root radius",
                  allowed="(0, r_f): inside the root circle; one number or one per gear"),
-        SceneKey("extended_contact", "", True, "loaded teeth may also touch by their tip edges", allowed="`true` \\| `false`"),
+        SceneKey("extended_contact", "", True, "loaded teeth may also touch by their tip edges (`slice`, `iso`; `point` "
+                 "always takes the TCA's edge contacts)", allowed="`true` \\| `false`"),
     )
 
 

@@ -254,6 +254,11 @@ def loaded_contact_analysis(
             f"loaded contact analysis needs a family that supports it ('ltca' in supported_effects); "
             f"{type(pair).__name__} supports {sorted(pair.supported_effects) or 'the rigid TCA only'}"
         )
+    if not isinstance(pair, model.compliance.families):
+        raise ValueError(
+            f"compliance {type(model.compliance).__name__} models the teeth of "
+            f"{', '.join(f.__name__ for f in model.compliance.families)} only; got {type(pair).__name__}"
+        )
     pair = pair.resolve()
     if isinstance(model.compliance, ToothSectionCompliance):
         return _point_loaded(pair, tca, torque, model, active_pairs, rates)
@@ -304,12 +309,13 @@ def _point_loaded(pair, tca: TCAResult, torque, model: ContactModel, active_pair
         rotation, rotation_rate, point = jax.jvp(solve, (torque,), (jnp.ones_like(torque),), has_aux=True)
     else:
         (rotation, point), rotation_rate = solve(torque), None
-    nearest = jnp.argmin(jnp.abs(point.axial_position[..., None] - tca.slice_z[:n_mid]), axis=-1)
+    nearest = jnp.argmin(jnp.abs(point.axial_position[..., None] - tca.slice_z[..., :n_mid]), axis=-1)
     at_contact = (jnp.arange(n_mid) == nearest[..., None]) & jnp.isfinite(point.gaps)[..., None]
     on_slices = lambda x, empty=0.0: jnp.where(at_contact, x[..., None], empty)  # noqa: E731
     loaded_gap = jnp.maximum(point.gaps - point.arms * rotation[:, None], 0.0)
     total = jnp.sum(point.arms * point.loads, axis=-1)
-    converged = jnp.abs(total - torque * ratio) <= 1e-8 * jnp.maximum(torque * ratio, 1.0)
+    rtol, atol = model.accuracy.newton_tolerances(total.dtype)
+    converged = jnp.abs(total - torque * ratio) <= rtol * torque * ratio + atol
     return LTCAResult(
         pinion_angle=tca.pinion_angle,
         torque=torque,

@@ -210,7 +210,7 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
             "u2": interpolate(tca.gear_parameter), "z": z, "te": jnp.where(finite, peak, 0.0), "frac": frac}
 
 
-def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material = Material(),
+def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material | None = None,
                            coupling_length_mn: float = 1.1,
                            sections: tuple[ToothSection, ToothSection] | None = None,
                            active_pairs: Bool[Array, " pair"] | None = None) -> PointContactLoads:
@@ -224,7 +224,8 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
         pair: the resolved pair.
         tca: its `tooth_contact_analysis`.
         torque: pinion torque $T_1$ (N·mm).
-        material: both gears'.
+        material: both gears' (default `Material()`, built at the call so that it takes
+            the precision in force then).
         coupling_length_mn: the decay length $\\lambda$ of a point load along the face, in
             $m_n$ (as `SliceCompliance`).
         sections: the two teeth's `ToothSection`s; sampled from the pair if None.
@@ -234,6 +235,7 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
         `PointContactLoads`.
     """
     zones = pair.contact_zones()
+    material = Material() if material is None else material
     if sections is None:
         sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
     decay_length = coupling_length_mn * pair.normal_module

@@ -51,6 +51,7 @@ from .four_state import (
     STATES,
     four_state_impact,
 )
+from .meshing_stiffness import STIFFNESS_COLUMNS, meshing_stiffness
 
 #: The seed case: m_n 4 mm, z 24/24, b 55 mm, beta 15 deg, alpha 24 deg, n = 3.
 SEED_CASE = {"normal_module": 4.0, "teeth": (24, 24), "face_width": 55.0, "helix_angle_deg": 15.0,
@@ -66,9 +67,6 @@ SEED_TABLES = {
     "table1": {"velocity": (61.92, 61.92, 36.33, 36.33), "force": (4.816e4, 3.1392e4, 2.796e4, 1.7715e4)},
     "table2": {"velocity": (81.57, 81.57, 60.01, 60.01), "force": (6.344e4, 4.1354e4, 4.6185e4, 2.9261e4)},
 }
-#: Table 1's columns: (contact zone, the pair meshing in or out); zone 1 is the concave
-#: driving tooth, zone 0 the convex one (`ZONE_NAMES`).
-STIFFNESS_COLUMNS = ((1, "in"), (1, "out"), (0, "in"), (0, "out"))
 #: The seed's driving torque (N·mm): 100 N·m.
 SEED_TORQUE = 1.0e5
 #: kg per tonne: the seed's inertias are in kg·mm², the engine's in t·mm².
@@ -182,108 +180,6 @@ def seed_tables(paper_units: bool = False, stiffness=None) -> dict:
         ]
         out[name] = {"paper": list(SEED_TABLES[name]["force"]), "gearjax": forces}
     return out
-
-
-class MeshingStiffness(eqx.Module):
-    """Table 1's meshing stiffness $K$ computed on the loaded contact of the generated
-    surfaces (`meshing_stiffness`), in the order of `STIFFNESS_COLUMNS`.
-
-    Attributes:
-        stiffness: $K$ of each column (N/mm), mean over its events in the cycle (NaN where
-            the cycle holds none).
-        events: the number of hand-overs of the column's kind in the cycle (a pair of the
-            zone entering, or leaving, the load).
-        pinion_angle: the first such hand-over of each column (rad; NaN where none).
-    """
-
-    stiffness: Array
-    events: Array
-    pinion_angle: Array
-
-
-def meshing_stiffness(pair: DoubleArcGearPair | None = None, torque: ArrayLike = SEED_TORQUE,
-                      accuracy: Accuracy | str = "default") -> MeshingStiffness:
-    r"""The seed's meshing stiffness $K$ (Table 1) as gearjax defines and computes it.
-
-    The seed takes $K$ from other works and does not define it; formula (7) divides it
-    among the $n$ meshing points, so it is read here as the **whole mesh's stiffness** seen
-    along the normal of the pair that meshes in or out: at each grid position where a pair
-    of the zone carries load and did not at the position before (meshing in), or does and
-    will not at the position after (meshing out),
-
-    $$K = rac{\mathrm dT_2/\mathrm d\Theta}{m_k^2}$$
-
-    with the loaded contact's tangent mesh stiffness $\mathrm dT_2/\mathrm d\Theta$ (N·mm/rad,
-    `PointContactLoads.mesh_stiffness`, every pair in contact) and that pair's arm $m_k$ (mm,
-    its normal displacement per radian of the gear's lag). A pair's own stiffness would not
-    do: under the Hertz law it vanishes as $F^{1/3}$ at its first contact. $K$ is taken at the
-    hand-over itself, the angle where the pair's closing $m_k\Theta - e_k$ crosses zero
-    between two grid positions, extrapolated linearly from the two positions on the side
-    where the pair carries no load (there $K$ is smooth; on the other side the pair's own
-    stiffness grows as its load to the 1/3, with an unbounded slope at the hand-over).
-
-    Args:
-        pair: the pair (default: the seed's, `seed_pair()`).
-        torque: pinion torque (N·mm; default the seed's 100 N·m).
-        accuracy: of the loaded contact (at least 21 face slices, `ToothSectionCompliance`).
-
-    Returns:
-        `MeshingStiffness` (NumPy-resolved; not traced).
-    """
-    import numpy as np
-
-    from ..operating import OperatingPoint
-    from ..pipeline import simulate
-    from ..scene import Scene
-
-    pair = seed_pair() if pair is None else pair
-    result = simulate(Scene(pair, operating=OperatingPoint(torque=torque), accuracy=accuracy))
-    point = result.ltca.point_contact
-    n = len(np.asarray(result.tca.pinion_angle))
-    zone, index = np.asarray(result.tca.pair_zone), np.asarray(result.tca.pair_index)
-
-    def periodic(x, fill):
-        """`x` (pos, pair) over the cycle's pitch, two positions added at each end: a pitch
-        on, pair k stands where pair k − 1 stood (same zone); `fill` where that pair is
-        outside the window."""
-        def shifted(rows, by):
-            out = np.full_like(rows, fill)
-            for j in range(len(index)):
-                partner = np.flatnonzero((zone == zone[j]) & (index == index[j] + by))
-                if partner.size:
-                    out[:, j] = rows[:, partner[0]]
-            return out
-        return np.concatenate([shifted(x[n - 2:], 1), x, shifted(x[:2], -1)])
-
-    pitch = 2 * math.pi / pair.teeth[0]
-    angle = np.asarray(result.tca.pinion_angle)
-    angle = np.concatenate([angle[n - 2:] - pitch, angle, angle[:2] + pitch])
-    on = periodic(np.asarray(point.loads), 0.0) > 0.0
-    arms, gaps = periodic(np.asarray(point.arms), 1.0), periodic(np.asarray(point.gaps), np.inf)
-    rotation = np.concatenate([np.asarray(point.rotation)[n - 2:], np.asarray(point.rotation), np.asarray(point.rotation)[:2]])
-    mesh = np.concatenate([np.asarray(point.mesh_stiffness)[n - 2:], np.asarray(point.mesh_stiffness),
-                           np.asarray(point.mesh_stiffness)[:2]])
-    stiffness = mesh[:, None] / arms**2
-    closing = rotation[:, None] * arms - np.where(np.isfinite(gaps), gaps, 0.0)  # > 0: the pair is loaded
-    values, counts, angles = [], [], []
-    for z, kind in STIFFNESS_COLUMNS:
-        found = []
-        step = -1 if kind == "in" else 1  # towards the positions where the pair is unloaded
-        for k in np.flatnonzero(zone == z):
-            for p in range(2, n + 2):  # the cycle's own positions, each hand-over once
-                near, far = p + step, p + 2 * step
-                if not on[p, k] or on[near, k] or on[far, k] or not np.isfinite(gaps[[near, far], k]).all():
-                    continue
-                # the hand-over, where the pair's closing crosses zero between p and `near`,
-                # and K there extrapolated from the unloaded side, where it is smooth (on the
-                # loaded side the pair's own stiffness grows as its load to the 1/3)
-                t = closing[near, k] / (closing[near, k] - closing[p, k])
-                found.append((stiffness[near, k] + t * (stiffness[near, k] - stiffness[far, k]),
-                              angle[near] + t * (angle[p] - angle[near])))
-        counts.append(len(found))
-        values.append(float(np.mean([f[0] for f in found])) if found else math.nan)
-        angles.append(float(found[0][1]) if found else math.nan)
-    return MeshingStiffness(jnp.asarray(values), jnp.asarray(counts), jnp.asarray(angles))
 
 
 class HandoverImpact(eqx.Module):
