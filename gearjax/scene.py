@@ -200,13 +200,18 @@ def _compliance(pair: AbstractGearPair, compliance, effects: frozenset, accuracy
             f"{', '.join(f.__name__ for f in compliance.families)} only; got {type(pair).__name__}"
         )
     if "ltca" in effects:
-        check_face_slices(compliance, accuracy)
+        check_loaded_accuracy(compliance, accuracy)
     return compliance
 
 
-def check_face_slices(compliance: AbstractCompliance, accuracy: Accuracy) -> None:
-    """Raise `ValueError` where `accuracy` has fewer face slices than the loaded contact of
-    `compliance` needs (`AbstractCompliance.min_face_slices`)."""
+def check_loaded_accuracy(compliance: AbstractCompliance, accuracy: Accuracy) -> None:
+    """Raise `ValueError` where `accuracy` is coarser than the loaded contact of `compliance`
+    needs: fewer face slices than `min_face_slices`, or float32 where it `needs_float64`."""
+    if compliance.needs_float64 and accuracy.dtype != "float64":
+        raise ValueError(
+            f"accuracy.dtype must be 'float64' for the loaded contact of {type(compliance).__name__} "
+            f"(its float32 results are far from float64's; decision 0009); got {accuracy.dtype!r}"
+        )
     if accuracy.face_slices < compliance.min_face_slices:
         raise ValueError(
             f"accuracy.face_slices must be at least {compliance.min_face_slices} for the loaded contact of "

@@ -95,6 +95,8 @@ def test_the_scene_refuses_coarse_slices_the_impact_and_line_compliance():
     assert rigid.effects == frozenset()  # the rigid TCA needs no more slices, a load sweep does
     with pytest.raises(ValueError, match=r"accuracy.face_slices must be at least 21"):
         gj.load_sweep(rigid, torques_Nm=[100.0])
+    with pytest.raises(ValueError, match=r"accuracy.dtype must be 'float64' .*ToothSectionCompliance.*got 'float32'"):
+        gj.Scene(pair, operating=torque, accuracy=gj.Accuracy.preset("default").replace(dtype="float32"))
     with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state"):
         gj.Scene(pair, operating=torque, effects=("impact",))
     with pytest.raises(ValueError, match="models the teeth of AbstractInvolutePair only"):

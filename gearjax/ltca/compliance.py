@@ -102,11 +102,14 @@ class AbstractCompliance(eqx.Module):
             `compliance = "..."`, its description, its option keys), or None.
         min_face_slices: the fewest face slices (`Accuracy.face_slices`) at which the
             model's results converge (class variable); `Scene` refuses a coarser loaded scene.
+        needs_float64: the model's results need float64 (class variable); `Scene` refuses a
+            loaded float32 scene.
     """
 
     families: AbstractClassVar[tuple[type, ...]]
     scene_file: ClassVar[SceneFileSpec | None] = None
     min_face_slices: ClassVar[int] = 1
+    needs_float64: ClassVar[bool] = False
 
 
 class AbstractSliceCompliance(AbstractCompliance):

@@ -11,7 +11,7 @@ from ..impact import ImpactResult
 from ..ltca import LTCAResult
 from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
 from ..runtime.resources import check_memory
-from ..scene import Scene, check_face_slices, stack_scenes
+from ..scene import Scene, check_loaded_accuracy, stack_scenes
 from ..units import rad_per_s_to_rpm
 from ._axes import _speeds, _torques
 from .devices import _devices, _per_device, _rows
@@ -95,7 +95,7 @@ def design_sweep(
     if speeds is not None and "impact" not in stacked.effects:
         raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
     devices = _devices(devices)
-    check_face_slices(stacked.compliance, stacked.accuracy)
+    check_loaded_accuracy(stacked.compliance, stacked.accuracy)
     check_memory(stacked, loads=torques.shape[0], what="design_sweep")
     stacked = prepare(stacked)
     arrays, static = eqx.partition(stacked, eqx.is_array)

@@ -12,7 +12,7 @@ from ..impact import ImpactResult
 from ..ltca import LTCAResult
 from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
 from ..runtime.resources import check_memory
-from ..scene import Scene, check_face_slices
+from ..scene import Scene, check_loaded_accuracy
 from ..tca import TCAResult
 from ..units import rad_per_s_to_rpm
 from ._axes import _speeds, _torques
@@ -52,7 +52,7 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
         in engine units (`ltca.torque` in N·mm).
     """
     torques = _torques(torques, torques_Nm)
-    check_face_slices(scene.compliance, scene.accuracy)
+    check_loaded_accuracy(scene.compliance, scene.accuracy)
     check_memory(scene, loads=torques.shape[0], what="load_sweep")
     scene = prepare(scene)
     with precision(scene.accuracy):
