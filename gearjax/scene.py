@@ -23,7 +23,7 @@ from .geometry._base import EFFECTS, AbstractGearPair
 from .geometry.depth import FlankDepth
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
-from .ltca import COMPLIANCE_MODELS, AbstractCompliance, ContactModel, SliceCompliance
+from .ltca import AbstractCompliance, ContactModel, default_compliance
 from .tca import pair_window
 from .tca.grid import MAX_PAIRS
 from .operating import OperatingPoint
@@ -184,11 +184,11 @@ def _effects(pair: AbstractGearPair, operating: OperatingPoint, effects) -> froz
 
 
 def _compliance(pair: AbstractGearPair, compliance, effects: frozenset, accuracy: Accuracy) -> AbstractCompliance:
-    """The compliance model (default: the first of `COMPLIANCE_MODELS` that models the
-    family), checked against the family and, for a loaded scene, against the model's
-    `min_face_slices`."""
+    """The compliance model (default: `default_compliance`), checked against the family
+    and, for a loaded scene, against the model's `min_face_slices` and `needs_float64`
+    (`check_loaded_accuracy`)."""
     if compliance is None:
-        compliance = next((model() for model in COMPLIANCE_MODELS if isinstance(pair, model.families)), SliceCompliance())
+        compliance = default_compliance(pair)()
     if not isinstance(compliance, AbstractCompliance):
         raise ValueError(
             "compliance must be a compliance model (an AbstractCompliance, e.g. IsoCompliance() or "

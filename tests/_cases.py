@@ -1,5 +1,6 @@
 """Named hard cases and a seeded sampler of random valid designs, shared by the
-`test_hard_cases*.py` files.
+`test_hard_cases*.py` files; `run_scene_file`, a scene file through the command line and
+`simulate` in one compiled program (the double-circular-arc stage tests).
 
 Tooth counts, the tooth-pair window and the accuracy are static, so every design of one
 family and one pair of tooth counts is built with the same window (`window`) and runs in
@@ -317,3 +318,25 @@ def failure_kinds(known: dict[str, str], kinds=KINDS) -> list:
 
     return [pytest.param(kind, marks=pytest.mark.xfail(strict=True, reason=known[kind])) if kind in known else kind
             for kind in kinds]
+
+
+def run_scene_file(text: str, directory) -> tuple:
+    """`gearjax run --json --no-cache` on the scene file `text` (written to `directory`),
+    then `simulate` on the same scene: without the program cache the command compiles
+    `simulate`'s own program, which the second call reuses. Returns `(scene, result, the
+    command's JSON)`."""
+    import contextlib
+    import io
+    import json
+    import tomllib
+
+    from gearjax.cli import main
+    from gearjax.io.scene_file import scene_from_dict
+
+    path = directory / "scene.toml"
+    path.write_text(text)
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main(["run", str(path), "--json", "--no-cache"]) == 0
+    scene = scene_from_dict(tomllib.loads(text))
+    return scene, gj.simulate(scene), json.loads(buffer.getvalue())

@@ -12,7 +12,7 @@ import gearjax as gj
 from gearjax._solution import RESULTS
 from gearjax.impact import ImpactRegime
 from gearjax.impact.closed_form import edge_contact_closed_form
-from gearjax.impact.stiffness import local_stiffness
+from gearjax.impact.stiffness import local_stiffness, point_local_stiffness
 from gearjax.sweep import regime_transition
 
 ACC = gj.Accuracy(positions_per_pitch=16, face_slices=9)
@@ -128,6 +128,30 @@ def test_local_stiffness_fit_against_a_closed_form_curve(linear):
         # the linear term (as large as the Hertz term at the top load) bends the curve:
         # by 9e-4 over the default range's decade of forces
         assert float(fit.fit_error) > 5e-4
+
+
+@pytest.mark.parametrize("linear", [0.0, 2e-6])
+def test_point_local_stiffness_is_the_general_fit_of_one_point(linear):
+    """A point contact's explicit curve delta = c F + h F^(2/3) against the LTCA's contact
+    solver on one point with the same law; Hertz alone is F = h^(-3/2) delta^(3/2)."""
+    h, acc = 1.2e-4, gj.Accuracy()
+    point = point_local_stiffness(jnp.asarray(linear), jnp.asarray(h), jnp.asarray(2.0e3), acc)
+    general = local_stiffness(jnp.array([[linear]]), jnp.array([h]), 2.0 / 3.0, jnp.array([0.0]), jnp.array([True]),
+                              jnp.asarray(2.0e3), acc)
+    assert point.result == RESULTS.successful and general.result == RESULTS.successful
+    assert np.asarray(point.forces) == pytest.approx(np.asarray(general.forces), rel=1e-12)
+    forces = np.asarray(point.forces)
+    assert np.asarray(point.approaches) == pytest.approx(linear * forces + h * forces ** (2 / 3), rel=1e-12)
+    # the solver's law is regularised at zero load: less h (f/2)^e, f = 1e-9 (1 + F) here
+    shift = h * (0.5e-9 * (1.0 + forces)) ** (2 / 3)
+    assert np.asarray(general.approaches) == pytest.approx(np.asarray(point.approaches) - shift, rel=1e-9)
+    assert float(point.exponent) == pytest.approx(float(general.exponent), rel=1e-5)
+    if linear == 0.0:
+        assert float(point.exponent) == pytest.approx(1.5, rel=1e-10)
+        assert float(point.coefficient) == pytest.approx(h**-1.5, rel=1e-9)
+    else:
+        # the teeth's linear compliance, a third of the approach at the top load, lowers n
+        assert 1.0 < float(point.exponent) < 1.45
 
 
 def _turn(point, center, angle):

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from gearjax.ltca.point_contact import pair_loads, section_compliance, share_load, shared_rotation
+from gearjax.ltca.point_contact import pair_loads, point_load_compliance, section_compliance, share_load, shared_rotation
 
 E, NU = 206000.0, 0.3
 
@@ -38,6 +38,28 @@ def test_a_tapered_section_is_stiffer_at_the_root_than_the_tip_section():
     thick = section_compliance(x, jnp.full_like(x, 4.0), 0.0, 0.2, E, NU)
     thin = section_compliance(x, jnp.full_like(x, 2.0), 0.0, 0.2, E, NU)
     assert thick < c < thin
+
+
+@pytest.mark.parametrize("z", [0.0, 20.0, 26.5, 27.5])
+def test_a_point_load_deflects_as_the_slices_shear_layer_does(z):
+    """The continuous Green's function against `SliceCompliance`'s discrete model (slices
+    coupled by a shear layer with free ends, `pasternak_compliance`) on 2 201 slices of a
+    55 mm face: a unit load on the slice at z deflects it as the closed form says; c_t/(2λ)
+    mid-face, twice that at the face end."""
+    from gearjax.ltca.compliance import pasternak_compliance
+
+    section, decay, width, n = 1.0e-4, 4.4, 55.0, 2201
+    dz = width / n
+    centres = -0.5 * width + dz * (np.arange(n) + 0.5)
+    j = int(np.argmin(np.abs(centres - z)))
+    matrix = pasternak_compliance(jnp.full(n, section), dz, decay)
+    # the slice's load acts at its centre; the end slice's centre is dz/2 inside the face
+    closed = float(point_load_compliance(section, decay, centres[j], width))
+    assert float(matrix[j, j]) == pytest.approx(closed, rel=2e-3)
+    if z == 0.0:
+        assert closed == pytest.approx(section / (2 * decay), rel=1e-5)
+    if z == 27.5:
+        assert float(point_load_compliance(section, decay, z, width)) == pytest.approx(section / decay, rel=1e-5)
 
 
 def test_one_pair_takes_the_whole_torque_with_its_own_approach():

@@ -2,12 +2,10 @@
 with a torque, run by `gearjax run --no-cache` and by `simulate` (one compiled program:
 `simulate`'s, which the command compiles without its program cache), its slice layout
 against its own point contacts, and the scene's checks
-(`ToothSectionCompliance.min_face_slices`, no impact yet)."""
+(`ToothSectionCompliance.min_face_slices`, float64); the impact is `test_point_impact`'s."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
@@ -16,18 +14,11 @@ import pytest
 import gearjax as gj
 from gearjax.cli import main
 from gearjax.io.scene_file import SceneFileError, scene_from_dict
-from gearjax.papers.double_arc import SEED_CASE
+from gearjax.papers.double_arc import SEED_CASE, seed_scene_file
 
-SCENE = f"""[pair]
-family = "double_circular_arc"
-teeth = [{SEED_CASE["teeth"][0]}, {SEED_CASE["teeth"][1]}]
-normal_module = {SEED_CASE["normal_module"]}
-helix_angle_deg = {SEED_CASE["helix_angle_deg"]}
-face_width = {SEED_CASE["face_width"]}
+from _cases import run_scene_file
 
-[operating]
-torque_Nm = 100.0
-"""
+SCENE = seed_scene_file(torque_Nm=100.0)
 
 
 def _pair():
@@ -37,15 +28,7 @@ def _pair():
 
 @pytest.fixture(scope="module")
 def loaded(tmp_path_factory):
-    path = tmp_path_factory.mktemp("dca") / "dca.toml"
-    path.write_text(SCENE)
-    buffer = io.StringIO()
-    with contextlib.redirect_stdout(buffer):  # without the program cache: simulate's own program, then shared
-        assert main(["run", str(path), "--json", "--no-cache"]) == 0
-    import tomllib
-
-    scene = scene_from_dict(tomllib.loads(SCENE))
-    return scene, gj.simulate(scene), json.loads(buffer.getvalue())
+    return run_scene_file(SCENE, tmp_path_factory.mktemp("dca"))
 
 
 def test_the_command_line_runs_a_loaded_scene(loaded):
@@ -86,7 +69,7 @@ def test_the_rotation_rate_is_the_inverse_mesh_stiffness(loaded):
                                rtol=0, atol=1e-15)
 
 
-def test_the_scene_refuses_coarse_slices_the_impact_and_line_compliance():
+def test_the_scene_refuses_coarse_slices_float32_and_line_compliance():
     pair = _pair()
     torque = gj.OperatingPoint(torque=1.0e5)
     with pytest.raises(ValueError, match=r"accuracy.face_slices must be at least 21 .*ToothSectionCompliance.*got 9"):
@@ -97,8 +80,6 @@ def test_the_scene_refuses_coarse_slices_the_impact_and_line_compliance():
         gj.load_sweep(rigid, torques_Nm=[100.0])
     with pytest.raises(ValueError, match=r"accuracy.dtype must be 'float64' .*ToothSectionCompliance.*got 'float32'"):
         gj.Scene(pair, operating=torque, accuracy=gj.Accuracy.preset("default").replace(dtype="float32"))
-    with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state"):
-        gj.Scene(pair, operating=torque, effects=("impact",))
     with pytest.raises(ValueError, match="models the teeth of AbstractInvolutePair only"):
         gj.Scene(pair, operating=torque, compliance=gj.SliceCompliance())
     with pytest.raises(ValueError, match="coupling_length"):

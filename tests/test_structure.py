@@ -105,9 +105,10 @@ def test_gradient_through_resolve_matches_finite_difference():
 
 def test_scene_checks_declared_stages():
     pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0)
-    assert pair.supported_effects == frozenset({"ltca"})
-    with pytest.raises(ValueError, match="not available for double-circular-arc gear pair.*four_state.*four-state"):
-        gj.Scene(pair, effects=("impact",), operating=gj.OperatingPoint(torque=1.0e5))
+    assert pair.supported_effects == frozenset({"ltca", "impact"})
+    zone = pair.contact_zones()[0]
+    with pytest.raises(ValueError, match="not available for DoubleArcZone.*rigid TCA only: load the DoubleArcGearPair"):
+        gj.Scene(zone, effects=("impact",), operating=gj.OperatingPoint(torque=1.0e5))
 
     class RigidOnly:
         supported_effects = frozenset()

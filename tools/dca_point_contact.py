@@ -18,7 +18,8 @@ the slices, varies by under 0.004 µm at 41 slices already); one JSON line per s
 the peak error's range (µm along the line of action) over every contact, position and
 offset (`samples`) whose peak lies inside the face.
 
-Prints, per preset, a JSON line: the loaded and unloaded TE peak-to-peak along the line of
+Prints, per preset, a JSON line: Table 1's meshing stiffness K (`meshing_stiffness`, on
+grids of 21 face slices or more), the loaded and unloaded TE peak-to-peak along the line of
 action, the gear's lag and the approach it means, the loads, the pairs' tangent stiffness,
 the mesh stiffness as a normal stiffness (dT/dΘ over the arm squared), the contact ellipse
 and pressure, and the profile-direction relative curvature B beside the rack arcs'
@@ -40,8 +41,9 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
-from gearjax.ltca.point_analysis import point_contact_analysis  # noqa: E402
+from gearjax.ltca.point_analysis import parabola_peak, point_contact_analysis  # noqa: E402
 from gearjax.papers.double_arc import SEED_CASE  # noqa: E402
+from gearjax.papers.meshing_stiffness import meshing_stiffness  # noqa: E402
 
 WINDOW = (-2, -1, 0, 1, 2, 3)
 
@@ -78,6 +80,11 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
         "face_slices": grid.face_slices,
         "torque_Nm": torque_Nm,
         "seconds_with_compilation": round(time.perf_counter() - start, 1),
+        # Table 1's K (`meshing_stiffness`: its own loaded program; grids a loaded scene accepts)
+        "meshing_stiffness_N_per_mm": (
+            [float(v) for v in meshing_stiffness(pair, 1e3 * torque_Nm, grid).stiffness]
+            if grid.face_slices >= gj.ToothSectionCompliance.min_face_slices else None
+        ),
         "te_peak_to_peak_um": 1e3 * ra2 * float(tca.te_peak_to_peak),
         "lte_peak_to_peak_um": 1e3 * ra2 * float(jnp.max(r.transmission_error) - jnp.min(r.transmission_error)),
         "lag_urad": span(1e6 * np.asarray(r.rotation)),
@@ -123,10 +130,8 @@ def peak_errors(accuracy: str, slice_counts: list[int]) -> list[dict]:
                 j = int(np.argmax(v))
                 if j == 0 or j == v.size - 1:
                     continue
-                left, here, right = v[j - 1], v[j], v[j + 1]
-                curvature = left - 2.0 * here + right
-                x = np.clip(-(right - left) / (2.0 * curvature), -1.0, 1.0) if curvature < 0 else 0.0
-                errors.append(here + 0.5 * x * (right - left) + 0.5 * x * x * curvature - ts[top])
+                _, peak, _ = parabola_peak(v[j - 1], v[j], v[j + 1])
+                errors.append(float(peak) - ts[top])
         rows.append({"accuracy": accuracy, "face_slices": count, "spacing_mm": round(float(spacing), 3),
                      "samples": len(errors), "peak_error_um": [round(float(np.min(errors)), 3),
                                                                 round(float(np.max(errors)), 3)]})

@@ -137,6 +137,8 @@ class AbstractGearPair(eqx.Module):
     supported_effects: AbstractClassVar[frozenset[str]]
     effects_note: ClassVar[str] = ""
     scene_file: ClassVar[SceneFileSpec | None] = None
+    #: Names of the contact zones, in the order of `contact_zones()` (reports).
+    zone_names: ClassVar[tuple[str, ...]] = ("drive flank",)
 
     @abc.abstractmethod
     def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
@@ -182,6 +184,12 @@ class AbstractGearPair(eqx.Module):
     def action_radii(self) -> Float[Array, "2"]:
         """`action_radius` of both gears, shape (..., 2) (mm)."""
         return jnp.stack([self.action_radius(0), self.action_radius(1)], -1)
+
+    def center(self, gear: int) -> Float[Array, "2"]:
+        """Axis position of `gear` in the fixed frame (mm)."""
+        a = self.center_distance
+        zero = jnp.zeros_like(a)
+        return jnp.stack([zero, zero]) if gear == 0 else jnp.stack([a, zero])
 
 
 class AbstractFlankPair(AbstractGearPair):
@@ -243,12 +251,6 @@ class AbstractFlankPair(AbstractGearPair):
         profile (mating tip circle) and the tip, $(u_\\text{start}, u_\\text{tip})$ (mm)."""
 
     # ------------------------------------------------------------------ derived geometry
-    def center(self, gear: int) -> Float[Array, "2"]:
-        """Axis position of `gear` in the fixed frame (mm)."""
-        a = self.center_distance
-        zero = jnp.zeros_like(a)
-        return jnp.stack([zero, zero]) if gear == 0 else jnp.stack([a, zero])
-
     def local_profile(self, gear: int, u: ArrayLike) -> Float[Array, "2"]:
         """Drive-flank profile of tooth 0 in the gear's local frame (mm, relative to its axis)."""
         return rotate2(self.placement(gear), self.profile(gear, u))

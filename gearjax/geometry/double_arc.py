@@ -45,7 +45,7 @@ from .._numerics import as_float
 from .._validate import check_range, is_concrete
 from ._base import AbstractGearPair, SceneFileSpec, derived, resolve_derived
 from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, generated_point
-from .double_arc_zone import EFFECTS_NOTE, DoubleArcZone
+from .double_arc_zone import DoubleArcZone
 
 ZONE_NAMES = ("convex driving tooth", "concave driving tooth")
 
@@ -77,9 +77,10 @@ class DoubleArcGearPair(AbstractGearPair):
     rack: GBT12759Rack = eqx.field(static=True)
     derived: dict[str, Array] | None
 
-    #: Point contact: loaded contact (`gearjax.ltca.point_analysis`); no impact yet.
-    supported_effects: ClassVar[frozenset[str]] = frozenset({"ltca"})
-    effects_note: ClassVar[str] = EFFECTS_NOTE
+    #: Point contact: loaded contact (`gearjax.ltca.point_analysis`) and the mesh-in impact
+    #: of each zone's incoming pair (`gearjax.impact`).
+    supported_effects: ClassVar[frozenset[str]] = frozenset({"ltca", "impact"})
+    zone_names: ClassVar[tuple[str, ...]] = ZONE_NAMES
     scene_file: ClassVar[SceneFileSpec] = SceneFileSpec(
         "double_circular_arc", "double-circular-arc gear pair (GB/T 12759)",
         {

@@ -25,13 +25,6 @@ from .double_arc_rack import CONCAVE, CONVEX
 if TYPE_CHECKING:
     from .double_arc import DoubleArcGearPair
 
-#: What a double-circular-arc pair lacks (`supported_effects` holds the loaded contact only).
-EFFECTS_NOTE = (
-    "the mesh-in impact of point-contact gears is not implemented; use the loaded contact "
-    "(a torque, no 'impact') and gearjax.papers.four_state for the seed's four-state impact model"
-)
-
-
 class DoubleArcZone(AbstractFlankPair):
     """The drive flanks of one contact zone of a `DoubleArcGearPair`: the pinion's convex
     addendum on the gear's concave dedendum (`zone` 0, convex driving tooth) or the

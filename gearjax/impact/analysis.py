@@ -17,11 +17,20 @@ closing rate of the gap, $\omega_1 q H'(\varphi_1^*)$, a cross-check reported as
 `gap_closing_velocity`.
 
 Local stiffness (`stiffness.py`), equivalent mass and force (`energy.py`) complete it.
+
+**Point contact** (double circular arc, `ToothSectionCompliance`). Each contact zone has
+its own incoming pair per pitch, so the search runs once per zone (batched) and every
+field of the `ImpactResult` gains a leading zone axis, in the order of
+`pair.contact_zones()`. The first touching point is the one the loaded contact uses
+(`search.point_peak`), and the local stiffness is that point's explicit law
+$\delta = cF + hF^{2/3}$ (`point_local_stiffness`): the tooth's section compliance and the
+Hertz point contact, so $n$ lies between 1 and 3/2.
 """
 
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, Float, Int, Scalar
@@ -29,11 +38,12 @@ from .._numerics import safe_divide
 from .._solution import RESULTS, enum_name, enum_where, first_failure
 from ..ltca.analysis import LTCAResult, _levers, moment_arms
 from ..ltca.model import ContactModel
+from ..ltca.point_analysis import ToothSectionCompliance, point_contact_analysis
 from ..tca import ContactKind, TCAResult
 from ..tca._slice_problem import contact_kind
 from .energy import base_radius_equivalent_mass, equivalent_mass, gear_inertia, impact_force
 from .search import SearchContext, _Search, bracket, first_contact
-from .stiffness import LocalStiffness, local_stiffness
+from .stiffness import LocalStiffness, local_stiffness, point_local_stiffness
 
 
 class ImpactRegime(eqx.Enumeration):
@@ -48,7 +58,8 @@ class ImpactResult(eqx.Module):
 
     Units: angular transmission-error quantities are in rad (gear 2) and carry no suffix
     (`loaded_te`); along the transverse line of action they are in mm with the suffix
-    `_line` (as `TCAResult.transmission_error_line`).
+    `_line` (as `TCAResult.transmission_error_line`). For a pair of several contact zones
+    (double circular arc) every field has a leading zone axis.
 
     Attributes:
         result: `RESULTS.successful`, or the first failure of the search:
@@ -133,7 +144,8 @@ def impact_analysis(
     pairs: tuple[int, ...],
     inertia=None,
 ) -> ImpactResult:
-    """Mesh-in impact of the pair coming into mesh (see the module docstring).
+    """Mesh-in impact of the pair coming into mesh (see the module docstring); for a
+    point-contact pair, of each contact zone's incoming pair (leading axis: zone).
 
     Args:
         pair, depth: the gear pair and its flank depths (modifications, errors).
@@ -148,16 +160,33 @@ def impact_analysis(
     """
     pair = pair.resolve()
     ctx = SearchContext(pair, depth, jnp.asarray(torque, ltca.rotation.dtype), model, tuple(pairs))
-    found, column, lower, upper, gap_lower, gap_upper = bracket(tca, ltca)
-    search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
-    return _impact_at(ctx, column, search, speed, inertia, found)
+    if ltca.point_contact is None:
+        found, column, lower, upper, gap_lower, gap_upper = bracket(tca, ltca)
+        search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
+        return _impact_at(ctx, column, search, speed, inertia, found)
+    # point contact: each contact zone's incoming pair strikes on its own, in one vmapped search
+    zones = tca.pair_index.shape[0] // len(pairs)
+    brackets = [bracket(tca, ltca, range(z * len(pairs), (z + 1) * len(pairs))) for z in range(zones)]
+    brackets = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *brackets)
+
+    def strike(found, column, lower, upper, gap_lower, gap_upper):
+        search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
+        return _impact_at(ctx, column, search, speed, inertia, found)
+
+    return jax.vmap(strike)(*brackets)
 
 
 def _local_fit(ctx: SearchContext, tca: TCAResult, column, p_arm) -> LocalStiffness:
     """Local stiffness $F = K_s\\delta^n$ of the incoming pair alone, from its
     first-contact configuration, loaded up to the static normal load (at least 10 N per mm
-    of face width)."""
+    of face width); for point-contact flanks from the pair's point coefficients there."""
     pair, acc = ctx.pair, ctx.model.accuracy
+    normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
+    reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
+    if isinstance(ctx.model.compliance, ToothSectionCompliance):
+        point = point_contact_analysis(pair, tca, ctx.torque, ctx.model.material, ctx.model.compliance.coupling_length)
+        return point_local_stiffness(point.linear_compliance[0, column], point.hertz_coefficient[0, column],
+                                     reference, acc)
     n_mid = acc.face_slices
     model = ctx.model
     points = model.compliance(pair, model.material, model.hub_radius, tca, n_mid, acc.quadrature_points,
@@ -171,8 +200,6 @@ def _local_fit(ctx: SearchContext, tca: TCAResult, column, p_arm) -> LocalStiffn
     valid = tca.valid[0, column, :n_mid]
     first = jnp.max(jnp.where(valid, slice_te, -jnp.inf))
     separation = jnp.maximum(q_all[0, column] * (first - jnp.where(valid, slice_te, first)), 0.0)
-    normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
-    reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
     return local_stiffness(matrix, nonlinear, points.exponent, separation, valid, reference, acc)
 
 
@@ -210,7 +237,7 @@ def _impact_at(ctx: SearchContext, column, search: _Search, speed, inertia, foun
     )
     return ImpactResult(
         result=result,
-        pair_index=jnp.asarray(ctx.pairs)[column],
+        pair_index=tca.pair_index[column],
         pinion_angle=phi1,
         slice_z=peak.z,
         kind=kind,

@@ -16,7 +16,10 @@ narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA bracke
 first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
 equals $\mathrm{LTE}_{\neg k}$ there). The first touching candidate gives the point M at
 $z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
-flank point. The same search serves every tooth family.
+flank point. The same search serves every tooth family; on point-contact flanks
+(double circular arc) the incoming pair's touching point is the one the loaded contact
+locates between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$ counts from
+the same located peaks.
 
 **Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
 binding slice or candidate changes, or where the LTCA's active set does), so a
@@ -49,12 +52,15 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._custom_types import Array, Bool, Int, Scalar
 from .._numerics import safe_divide
 from ..ltca.analysis import LTCAResult, loaded_contact_analysis
 from ..ltca.model import ContactModel
+from ..ltca.point_analysis import closest_contact
 from ..tca import TCAResult, tooth_contact_analysis
+from ..tca._slice_problem import CANDIDATES, SliceContact
 from ..tca.face_peak import FacePeak, face_peak
 
 
@@ -94,17 +100,53 @@ class _Contact(eqx.Module):
 def evaluate(ctx: SearchContext, column, phi1):
     """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
     incoming pair's first touching point along the face (`face_peak`, continuous in $z$
-    around the best slice $j$): `(te, lte, tca, peak), (j, solved)`."""
+    around the best slice $j$; for point-contact flanks `point_peak`, where the loaded
+    contact puts it): `(te, lte, tca, peak), (j, solved)`."""
     acc = ctx.model.accuracy
     tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None])
-    active = jnp.arange(len(ctx.pairs)) != column
+    active = jnp.arange(tca.pair_index.shape[0]) != column
     ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
+    if ltca.point_contact is not None:
+        peak, top = point_peak(tca, column)
+        # the loaded pairs' contacts sit at the rigid TE of the located peaks, less the lag
+        return (peak.te, top - ltca.rotation[0], tca, peak), (j, ltca.converged[0])
     spacing = ctx.pair.face_width / acc.face_slices
     peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
                      spacing)
     return (peak.te, ltca.transmission_error[0], tca, peak), (j, ltca.converged[0])
+
+
+def point_peak(tca: TCAResult, column) -> tuple[FacePeak, Scalar]:
+    """The point contact of pair `column` at the TCA's single position, located between the
+    face slices as the point-contact LTCA locates it (`closest_contact`: the parabola's
+    peak; points, normal and velocity interpolated linearly between the two slices around
+    it), and the largest located peak of all pairs, the rigid TE the loaded contact's lag
+    counts from (rad): `(peak, top)`. The peak's value is `-inf` where the pair does not
+    touch."""
+    located = closest_contact(tca)
+    start, other, weight = (x[0, column] for x in located["between"])
+    touching = jnp.isfinite(located["gap"][0])
+
+    def at(field):
+        return (1.0 - weight) * field[0, column, start] + weight * field[0, column, other]
+
+    nearest = located["slice"][0, column]
+    kind = jax.tree_util.tree_map(lambda x: x[0, column, nearest], tca.kind)
+    contact = SliceContact(
+        offset=located["te"][0, column],
+        pinion_parameter=located["u1"][0, column],
+        gear_parameter=located["u2"][0, column],
+        kind=sum(i * (kind == c).astype(jnp.int32) for i, c in enumerate(CANDIDATES)),
+        valid=touching[column],
+        unconverged=tca.unconverged[0, column, nearest],
+    )
+    normal = at(tca.normal)
+    te = jnp.where(touching[column], located["te"][0, column], -jnp.inf)
+    peak = FacePeak(located["z"][0, column], te, contact, at(tca.pinion_point), at(tca.gear_point),
+                    normal / jnp.linalg.norm(normal), at(tca.relative_velocity))
+    return peak, jnp.max(jnp.where(touching, located["te"][0], -jnp.inf))
 
 
 def _with_rates(ctx: SearchContext, column, phi1):
@@ -278,21 +320,23 @@ def _first_contact_jvp(primals, tangents):
     return search, d_search
 
 
-def bracket(tca: TCAResult, ltca: LTCAResult):
+def bracket(tca: TCAResult, ltca: LTCAResult, columns=None):
     """First upward crossing of $H$ along the tracked tooth's history on the cycle grid:
-    `(found, column, lower, upper, gap_lower, gap_upper)`.
+    `(found, column, lower, upper, gap_lower, gap_upper)`; among the pairs `columns` only
+    (a NumPy index array into the pair axis, default all: one contact zone's window).
 
     Pair $k$ at pinion angle $\\varphi_1$ is pair 0 at $\\varphi_1 - kp$, so ordering the
     grid by descending pair and ascending angle follows one tooth through the mesh. The
     gap at `upper` is the scene's, with pair $k$ loaded: it only seeds the first step.
     """
     offsets = jnp.max(jnp.where(tca.valid, tca.slice_te, -jnp.inf), axis=-1)  # (pos, pair)
-    h = offsets - ltca.transmission_error[:, None]
+    columns = np.arange(offsets.shape[-1]) if columns is None else np.asarray(columns)
+    h = offsets[:, columns] - ltca.transmission_error[:, None]
     n_pos, n_pair = h.shape
     line = h[:, ::-1].T.reshape(-1)
-    columns = jnp.repeat(jnp.arange(n_pair)[::-1], n_pos)
+    tracked = jnp.repeat(jnp.asarray(columns)[::-1], n_pos)
     angles = jnp.tile(tca.pinion_angle, n_pair)
     up = (line[1:] >= 0) & (line[:-1] < 0)
     i = jnp.argmax(up) + 1
     step = tca.pinion_angle[1] - tca.pinion_angle[0]
-    return jnp.any(up), columns[i], angles[i] - step, angles[i], line[i - 1], line[i]
+    return jnp.any(up), tracked[i], angles[i] - step, angles[i], line[i - 1], line[i]

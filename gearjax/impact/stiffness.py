@@ -90,7 +90,25 @@ def local_stiffness(
         return sol.rotation, sol.converged
 
     delta, converged = jax.vmap(approach)(forces)
-    x, y = jnp.log(delta), jnp.log(forces)
+    return power_law_fit(forces, delta, converged)
+
+
+def point_local_stiffness(linear: Scalar, hertz: Scalar, reference_load: Scalar, accuracy: Accuracy) -> LocalStiffness:
+    """Fit $F = K_s\\delta^n$ for a pair touching at one point (`gearjax.ltca.point_contact`):
+    its approach is explicit, $\\delta = cF + hF^{2/3}$, with the linear tooth compliance
+    $c$ (mm/N) and the Hertz coefficient $h$ (mm/N$^{2/3}$), so $n$ lies between 1 (the
+    teeth's bending dominates) and 3/2 (Hertz alone, $K_s = h^{-3/2}$). Forces as
+    `local_stiffness`'s."""
+    lo, hi = accuracy.impact_fit_range
+    forces = reference_load * jnp.geomspace(lo, hi, accuracy.impact_fit_points).astype(jnp.result_type(hertz))
+    delta = linear * forces + hertz * jnp.cbrt(forces) ** 2
+    return power_law_fit(forces, delta, jnp.isfinite(delta))
+
+
+def power_law_fit(forces: Float[Array, " fit"], approaches: Float[Array, " fit"], converged) -> LocalStiffness:
+    """Least-squares fit of $\\log F = \\log K_s + n\\log\\delta$ (`LocalStiffness`; failed
+    where any entry of `converged` is False)."""
+    x, y = jnp.log(approaches), jnp.log(forces)
     xm, ym = jnp.mean(x), jnp.mean(y)
     n = jnp.sum((x - xm) * (y - ym)) / jnp.sum((x - xm) ** 2)
     log_k = ym - n * xm
@@ -99,7 +117,7 @@ def local_stiffness(
         coefficient=jnp.exp(log_k),
         exponent=n,
         forces=forces,
-        approaches=delta,
+        approaches=approaches,
         fit_error=jnp.max(jnp.abs(fit / forces - 1.0)),
         result=first_failure((~jnp.all(converged), RESULTS.stiffness_fit_failed)),
     )

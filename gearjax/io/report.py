@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import jax
 import numpy as np
 
 from .._solution import RESULTS, enum_message, enum_name
@@ -96,7 +97,18 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
 
 
 def impact_dict(scene: Scene, result: SimulationResult) -> dict:
+    """The impact's figures; for a pair of several contact zones (double circular arc),
+    `{"zones": [...]}`, one entry per zone's incoming pair with its `zone` name."""
     imp = result.impact
+    if np.ndim(imp.force) == 0:
+        return _one_impact(imp, result.ltca.action_radius)
+    names = scene.pair.zone_names
+    return {"zones": [{"zone": names[z]} | _one_impact(jax.tree_util.tree_map(lambda x: x[z], imp),
+                                                       result.ltca.action_radius)
+                      for z in range(len(names))]}
+
+
+def _one_impact(imp, action_radius) -> dict:
     stiff = imp.stiffness
     return {
         "force_N": _f(imp.force),
@@ -110,7 +122,7 @@ def impact_dict(scene: Scene, result: SimulationResult) -> dict:
         "gear_roll_length_mm": _f(imp.gear_parameter),
         "face_position_mm": _f(imp.slice_z),
         "pinion_angle_deg": _f(imp.pinion_angle) * 180.0 / math.pi,
-        "loaded_te_um": _f(imp.loaded_te) * _f(result.ltca.action_radius[1]) * UM_PER_MM,
+        "loaded_te_um": _f(imp.loaded_te) * _f(action_radius[1]) * UM_PER_MM,
         "stiffness_coefficient_N_per_mm_n": _f(stiff.coefficient),
         "stiffness_exponent": _f(stiff.exponent),
         "stiffness_fit_error": _f(stiff.fit_error),
@@ -153,6 +165,13 @@ CONTACT_WORDS = {
     "flank": "flank on flank", "gear_tip_edge": "the gear's tip edge on the pinion flank",
     "pinion_tip_edge": "the pinion's tip edge on the gear flank",
 }
+
+
+def _impacts(out: dict) -> list[dict]:
+    """The impact entries of `result_dict`'s output: none, one, or one per contact zone."""
+    if "impact" not in out:
+        return []
+    return out["impact"].get("zones", [out["impact"]])
 
 
 def family_words(family: str, helix_angle_deg: float | None = None) -> str:
@@ -209,10 +228,10 @@ def summary(out: dict) -> str:
                          f"{lt['max_pair_load_N']:.0f} N")
         if lt["result"] != "successful":
             lines.append(f"  warning: {enum_message(getattr(RESULTS, lt['result']))}")
-    if "impact" in out:
-        im = out["impact"]
+    for im in _impacts(out):
+        zone = f", {im['zone']}" if "zone" in im else ""
         lines += [
-            f"Mesh-in impact ({im['regime']} strike: {CONTACT_WORDS.get(im['contact_kind'], im['contact_kind'])})",
+            f"Mesh-in impact{zone} ({im['regime']} strike: {CONTACT_WORDS.get(im['contact_kind'], im['contact_kind'])})",
             f"  impact force               F_s = {im['force_N']:.0f} N, normal velocity v_n = {im['velocity_mm_per_s']:.1f} mm/s",
             f"  local stiffness            F = {im['stiffness_coefficient_N_per_mm_n']:.4g} delta^{im['stiffness_exponent']:.3f} (N, mm)",
             f"  point M                    pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "

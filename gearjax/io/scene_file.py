@@ -16,7 +16,7 @@ from ..accuracy import Accuracy
 from ..geometry import FAMILIES
 from ..geometry.errors import MeshErrors
 from ..geometry.modification import FlankModification
-from ..ltca import COMPLIANCE_MODELS
+from ..ltca import COMPLIANCE_MODELS, default_compliance
 from ..scene import EFFECTS, MAX_PITCHES, OperatingPoint, Scene
 from ..units import Material
 from .scene_keys import check_declared, declared, field_message, toml_value
@@ -302,10 +302,10 @@ def _material_from(data: dict):
 
 def _ltca_from(ltca: dict, pair):
     """[ltca]: (compliance model, hub radius or None, extended_contact); the compliance
-    model by default the first of `COMPLIANCE_MODELS` that models `pair`'s family."""
+    model by default `default_compliance(pair)`."""
     _unknown("ltca", ltca, _LTCA_KEYS)
     by_name = {cls.scene_file.family: cls for cls in COMPLIANCE_MODELS}
-    default = next((cls for cls in COMPLIANCE_MODELS if isinstance(pair, cls.families)), COMPLIANCE_MODELS[0])
+    default = default_compliance(pair)
     kind = ltca.get("compliance", default.scene_file.family)
     if not isinstance(kind, str) or kind not in by_name:
         raise _fail("ltca.compliance", f"must be {' or '.join(repr(name) for name in by_name)}; got {kind!r}")

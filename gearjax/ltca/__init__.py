@@ -16,3 +16,10 @@ from .solver import ContactProblem as ContactProblem, ContactSolution as Contact
 #: The compliance models a scene file can name (`AbstractCompliance.scene_file`), the
 #: default first: a new model is added here, in its own module and in its tests.
 COMPLIANCE_MODELS = (SliceCompliance, IsoCompliance, ToothSectionCompliance)
+
+
+def default_compliance(pair) -> type[AbstractCompliance]:
+    """The compliance model a scene takes for `pair` when none is given: the first of
+    `COMPLIANCE_MODELS` that models its family (the first of all for a family none models,
+    whose loaded scene the checks then refuse)."""
+    return next((model for model in COMPLIANCE_MODELS if isinstance(pair, model.families)), COMPLIANCE_MODELS[0])

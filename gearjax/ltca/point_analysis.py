@@ -11,7 +11,8 @@ Per position and tooth pair (both zones), at the pair's closest slice contact of
 * the linear compliance $c_k$: each tooth's section compliance (`section_compliance`, the
   tooth's generated transverse profile as the section, the load at the contact point along
   the transverse part of the normal), spread along the face with the decay length
-  $\lambda$ (`point_load_compliance`), made normal by $|n_t|^2$, the two teeth summed. No
+  $\lambda$ between free face ends (`point_load_compliance`: twice as compliant at an
+  end as mid-face), made normal by $|n_t|^2$, the two teeth summed. No
   fillet-foundation term, no coupling between the teeth of different pairs. Edge contacts
   (a tip edge or a face end on a flank) are taken with the flanks' curvatures, floored at
   `MIN_CURVATURE`: the edge's own rounding is not modelled.
@@ -169,8 +170,19 @@ def _contact_coefficients(zone, sections, k, phi1, u1, u2, z, te, normal, frac, 
     for gear, u in ((0, u1), (1, u2)):
         point, n2 = _tooth_frame_normal(zone, gear, u)
         section = sections[gear].compliance(point, n2, material.youngs_modulus, material.poisson_ratio)
-        linear = linear + frac**2 * point_load_compliance(section, decay_length)
+        linear = linear + frac**2 * point_load_compliance(section, decay_length, z, zone.face_width)
     return hertz, linear, a_curv, b_curv
+
+
+def parabola_peak(left: ArrayLike, here: ArrayLike, right: ArrayLike) -> tuple[Array, Array, Array]:
+    """The vertex of the parabola through three equally spaced values: `(x, peak, concave)`,
+    its offset $x$ from the middle one in spacings (clipped to $[-1, 1]$), its value there,
+    and whether it opens downwards (where not, `x` is 0 and `peak` the middle value)."""
+    curvature = left - 2.0 * here + right
+    concave = curvature < 0.0
+    safe = jnp.where(concave, curvature, -1.0)
+    x = jnp.where(concave, jnp.clip(-(right - left) / (2.0 * safe), -1.0, 1.0), 0.0)
+    return x, here + 0.5 * x * (right - left) + 0.5 * x * x * safe * concave, concave
 
 
 def closest_contact(tca: TCAResult) -> dict[str, Array]:
@@ -178,7 +190,9 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     parabola through the largest slice TE and its neighbours peaks (a face-end contact where
     that is larger). Returns the nearest slice `slice`, the rigid normal gap `gap` (mm, from
     the largest of the pairs' peaks; `inf` out of mesh), the profile parameters `u1`, `u2`
-    and axial position `z` (mm, interpolated), the peak TE `te` (rad) and `frac` ($|n_t|$)."""
+    and axial position `z` (mm, interpolated), the peak TE `te` (rad), `frac` ($|n_t|$) and
+    `between`, the slices `(start, other)` and the weight of `other` that interpolate
+    there."""
     n_mid = tca.slice_z.shape[-1] - 2
     te = jnp.where(tca.valid, tca.slice_te, -jnp.inf)
     mid = te[..., :n_mid]
@@ -186,11 +200,11 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     centre = jnp.clip(best, 1, n_mid - 2)
     pick = lambda x, k: jnp.take_along_axis(x, k[..., None], axis=-1)[..., 0]  # noqa: E731
     left, here, right = pick(mid, centre - 1), pick(mid, centre), pick(mid, centre + 1)
-    curvature = left - 2.0 * here + right
-    ok = (best == centre) & jnp.isfinite(left) & jnp.isfinite(right) & (curvature < 0.0)
-    safe = jnp.where(ok, curvature, -1.0)
-    x = jnp.where(ok, jnp.clip(-(right - left) / (2.0 * safe), -1.0, 1.0), 0.0)
-    peak = jnp.where(ok, here + 0.5 * x * (right - left) + 0.5 * x * x * safe, pick(mid, best))
+    ok = (best == centre) & jnp.isfinite(left) & jnp.isfinite(right)
+    x, peak, concave = parabola_peak(jnp.where(ok, left, 0.0), here, jnp.where(ok, right, 0.0))
+    ok = ok & concave
+    x = jnp.where(ok, x, 0.0)
+    peak = jnp.where(ok, peak, pick(mid, best))
     ends = jnp.max(te[..., n_mid:], axis=-1)
     at_end = ends > peak
     slice_index = jnp.where(at_end, n_mid + jnp.argmax(te[..., n_mid:], axis=-1), best)
@@ -209,7 +223,8 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     gap = jnp.where(finite, (top - jnp.where(finite, peak, 0.0)) * tca.action_radius[1] * frac, jnp.inf)
     z = (1.0 - weight) * tca.slice_z[start] + weight * tca.slice_z[other]
     return {"slice": slice_index, "gap": gap, "u1": interpolate(tca.pinion_parameter),
-            "u2": interpolate(tca.gear_parameter), "z": z, "te": jnp.where(finite, peak, 0.0), "frac": frac}
+            "u2": interpolate(tca.gear_parameter), "z": z, "te": jnp.where(finite, peak, 0.0), "frac": frac,
+            "between": (start, other, weight)}
 
 
 def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material | None = None,

@@ -15,9 +15,16 @@ $$c_t = \int_{x_r}^{x_F}\Big[\frac{\big((x_F - x)\cos\gamma - y_F\sin\gamma\big)
 the samples.
 
 **A point load on a tooth of finite face width.** Along the face the tooth is taken as
-the Winkler foundation with a shear layer of `SliceCompliance` (Ajmi & Velex 2005): a point
-load spreads with the decay length $\lambda$, and its deflection is $c_t/(2\lambda)$ on an
-infinite face (mm/N).
+the Winkler foundation with a shear layer of `SliceCompliance` (Ajmi & Velex 2005), in its
+continuous form $w/c_t - \lambda^2 w''/c_t = q$ on the face $|s| \le b/2$ with free ends
+($w' = 0$): a point load spreads with the decay length $\lambda$, and its deflection under
+the load at $z$ is the Green's function there,
+
+$$\frac{w}{F} = \frac{c_t}{\lambda}\,\frac{\cosh\frac{b/2 + z}{\lambda}\,
+\cosh\frac{b/2 - z}{\lambda}}{\sinh\frac{b}{\lambda}}$$
+
+(mm/N): $c_t/(2\lambda)$ far from the ends, twice that at a face end, as the slices'
+tridiagonal model gives for the involute tooth.
 
 **Load sharing.** Each tooth pair $k$ in mesh touches at one point with the rigid normal
 gap $e_k$ (mm, from the TCA) and carries $F_k \ge 0$ with the approach
@@ -62,11 +69,17 @@ def section_compliance(x: ArrayLike, half_thickness: ArrayLike, load_offset: Arr
     return jnp.sum(0.5 * (integrand[..., 1:] + integrand[..., :-1]) * jnp.diff(x, axis=-1), axis=-1)
 
 
-def point_load_compliance(section: ArrayLike, decay_length: ArrayLike) -> Array:
-    """Deflection per unit point load (mm/N) of a tooth whose compliance per unit face width
-    is `section` (mm²/N), spread along the face with `decay_length` $\\lambda$ (mm):
-    $c_t/(2\\lambda)$."""
-    return section / (2.0 * decay_length)
+def point_load_compliance(section: ArrayLike, decay_length: ArrayLike, z: ArrayLike, face_width: ArrayLike) -> Array:
+    """Deflection per unit point load (mm/N) at the axial position `z` (mm, 0 mid-face) of a
+    tooth of `face_width` $b$ (mm) whose compliance per unit face width is `section` (mm²/N),
+    spread along the face with `decay_length` $\\lambda$ (mm): the module's Green's function,
+    as $\\frac{c_t}{2\\lambda}(1 + e^{-2a})(1 + e^{-2c})/(1 - e^{-2(a + c)})$ with
+    $a, c = (b/2 \\pm z)/\\lambda$ (no overflow for any $b/\\lambda$)."""
+    half = 0.5 * face_width
+    z = jnp.clip(z, -half, half)
+    a, c = (half + z) / decay_length, (half - z) / decay_length
+    ends = (1.0 + jnp.exp(-2.0 * a)) * (1.0 + jnp.exp(-2.0 * c)) / (1.0 - jnp.exp(-2.0 * (a + c)))
+    return section / (2.0 * decay_length) * ends
 
 
 def _pair_load(approach, linear, hertz):

@@ -30,6 +30,8 @@ generated surfaces (`handover_impacts`).
 
 from __future__ import annotations
 
+import json
+
 import math
 
 import equinox as eqx
@@ -237,6 +239,23 @@ def seed_pair() -> DoubleArcGearPair:
     """The seed case (`SEED_CASE`) as a `DoubleArcGearPair` with the recalled GB/T 12759 rack."""
     c = SEED_CASE
     return DoubleArcGearPair(c["teeth"], c["normal_module"], c["helix_angle_deg"], c["face_width"])
+
+
+def seed_scene_file(torque_Nm: float | None = None, speed_rpm: float | None = None,
+                    analysis: dict[str, object] | None = None) -> str:
+    """The seed case as a scene file (TOML text): its `[pair]`, with `[operating]` when a
+    torque or speed is given and `[analysis]` holding `analysis`'s entries (e.g.
+    `{"effects": ["impact"]}`)."""
+    c = SEED_CASE
+    lines = ["[pair]", 'family = "double_circular_arc"', f"teeth = [{c['teeth'][0]}, {c['teeth'][1]}]",
+             f"normal_module = {c['normal_module']}", f"helix_angle_deg = {c['helix_angle_deg']}",
+             f"face_width = {c['face_width']}"]
+    operating = {"torque_Nm": torque_Nm, "speed_rpm": speed_rpm}
+    if any(v is not None for v in operating.values()):
+        lines += ["", "[operating]"] + [f"{k} = {v}" for k, v in operating.items() if v is not None]
+    if analysis:
+        lines += ["", "[analysis]"] + [f"{k} = {json.dumps(v)}" for k, v in analysis.items()]
+    return "\n".join(lines) + "\n"
 
 
 def reproduce(cross_check: bool = False) -> dict:

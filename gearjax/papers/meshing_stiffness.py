@@ -86,14 +86,17 @@ def meshing_stiffness(pair: DoubleArcGearPair, torque: ArrayLike, accuracy: Accu
             return out
         return np.concatenate([shifted(x[n - 2:], 1), x, shifted(x[:2], -1)])
 
+    def extend(x):
+        """A quantity of the whole mesh, (pos,), over the cycle's pitch with two positions
+        added at each end: the same a pitch on."""
+        return np.concatenate([x[n - 2:], x, x[:2]])
+
     pitch = 2 * math.pi / pair.teeth[0]
     angle = np.asarray(result.tca.pinion_angle)
-    angle = np.concatenate([angle[n - 2:] - pitch, angle, angle[:2] + pitch])
+    angle = extend(angle) + np.concatenate([np.full(2, -pitch), np.zeros(n), np.full(2, pitch)])
     on = periodic(np.asarray(point.loads), 0.0) > 0.0
     arms, gaps = periodic(np.asarray(point.arms), 1.0), periodic(np.asarray(point.gaps), np.inf)
-    rotation = np.concatenate([np.asarray(point.rotation)[n - 2:], np.asarray(point.rotation), np.asarray(point.rotation)[:2]])
-    mesh = np.concatenate([np.asarray(point.mesh_stiffness)[n - 2:], np.asarray(point.mesh_stiffness),
-                           np.asarray(point.mesh_stiffness)[:2]])
+    rotation, mesh = extend(np.asarray(point.rotation)), extend(np.asarray(point.mesh_stiffness))
     stiffness = mesh[:, None] / arms**2
     closing = rotation[:, None] * arms - np.where(np.isfinite(gaps), gaps, 0.0)  # > 0: the pair is loaded
     values, counts, angles = [], [], []

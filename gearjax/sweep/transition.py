@@ -74,6 +74,9 @@ def regime_transition(
         raise ValueError("scene must be a Scene or a non-empty list of Scene objects")
     if any("impact" not in sc.effects for sc in scenes):
         raise ValueError("regime_transition needs a scene with effects including 'impact'")
+    if any(len(sc.pair.contact_zones()) > 1 for sc in scenes):
+        raise ValueError("regime_transition needs a pair of one contact zone (one incoming pair per pitch); "
+                         "a double-circular-arc pair's zones each have their own impact: use load_sweep")
     stacked = prepare(stack_scenes(scenes))
     arrays, static = eqx.partition(stacked, eqx.is_array)
     with precision(stacked.accuracy):

@@ -1,0 +1,82 @@
+"""The mesh-in impact of a double-circular-arc pair on its point-contact loaded model: a
+scene file with a torque, a speed and `effects = ["impact"]`, run by `gearjax run
+--no-cache` and by `simulate` (one compiled program, as in `test_point_ltca`), one first
+contact per contact zone."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import gearjax as gj
+from gearjax._solution import RESULTS
+from gearjax.impact.search import SearchContext, evaluate
+from gearjax.io.report import summary
+from gearjax.papers.double_arc import SEED_CASE, seed_scene_file
+
+from _cases import run_scene_file
+
+SCENE = seed_scene_file(torque_Nm=100.0, speed_rpm=200.0, analysis={"effects": ["impact"]})
+
+
+@pytest.fixture(scope="module")
+def struck(tmp_path_factory):
+    return run_scene_file(SCENE, tmp_path_factory.mktemp("dca_impact"))
+
+
+def test_the_command_line_reports_each_zones_impact(struck):
+    scene, result, out = struck
+    zones = out["impact"]["zones"]
+    assert [z["zone"] for z in zones] == list(scene.pair.zone_names) == ["convex driving tooth", "concave driving tooth"]
+    imp = result.impact
+    assert imp.force.shape == (2,)
+    for z, entry in enumerate(zones):
+        assert entry["result"] == "successful" and entry["converged"]
+        assert entry["force_N"] == pytest.approx(float(imp.force[z]), rel=1e-12) and entry["force_N"] > 0.0
+        assert entry["velocity_mm_per_s"] > 0.0
+        # the point contact travels along the face: the incoming pair's enters at a face end
+        assert abs(entry["face_position_mm"]) == pytest.approx(SEED_CASE["face_width"] / 2, abs=1e-9)
+    text = summary(out)
+    assert "Mesh-in impact, convex driving tooth" in text and "Mesh-in impact, concave driving tooth" in text
+
+
+def test_each_zones_impact_balances_its_energy(struck):
+    """The kinetic energy of the relative motion at first contact, ½ m v², is the strain
+    energy of the fitted law at the peak approach, K δ^(n+1)/(n+1); the point law's exponent
+    lies between the teeth's bending (1) and Hertz (3/2); and the normal velocity from the
+    kinematics at the located point agrees with the closing rate of the gap."""
+    _, result, _ = struck
+    imp = result.impact
+    assert (imp.result == RESULTS.successful).all()
+    k, n, delta = (np.asarray(x) for x in (imp.stiffness.coefficient, imp.stiffness.exponent, imp.approach))
+    np.testing.assert_allclose(np.asarray(imp.kinetic_energy), k * delta ** (n + 1) / (n + 1), rtol=1e-9)
+    assert ((n > 1.0) & (n < 1.5)).all()
+    np.testing.assert_allclose(np.asarray(imp.velocity), np.asarray(imp.gap_closing_velocity), rtol=1e-6)
+
+
+def test_each_zones_first_contact_is_the_root_of_its_gap(struck):
+    """At the first contact the zone's incoming pair's located peak meets the loaded TE of the
+    others (H = 0 to the search's tolerance), and a little earlier it is clear (H < 0)."""
+    scene, result, _ = struck
+    imp = result.impact
+    pair = scene.pair.resolve()
+    ctx = SearchContext(pair, scene.depth, jnp.asarray(scene.operating.torque), scene.contact_model, scene.pairs)
+    columns = [z * len(scene.pairs) + scene.pairs.index(int(imp.pair_index[z])) for z in range(2)]
+
+    @eqx.filter_jit
+    def gap(column, phi1):
+        (te, lte, _, _), _ = evaluate(ctx, column, phi1)
+        return te - lte
+
+    for z, column in enumerate(columns):
+        root = imp.pinion_angle[z]
+        assert abs(float(gap(column, root))) < 1e-9  # rad
+        assert float(gap(column, root - 2e-4)) < 0.0
+
+
+def test_a_transition_search_refuses_a_pair_of_two_zones(struck):
+    scene, _, _ = struck
+    with pytest.raises(ValueError, match="one contact zone"):
+        gj.regime_transition(scene, low_Nm=10.0, high_Nm=200.0)
