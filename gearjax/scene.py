@@ -220,6 +220,18 @@ def check_loaded_accuracy(compliance: AbstractCompliance, accuracy: Accuracy) ->
         )
 
 
+def check_one_zone(scene: Scene, what: str) -> None:
+    """Raise `ValueError` where `what` (a batched impact study that keeps one impact per
+    design, load and speed) gets a pair of several contact zones, whose zones strike each
+    on their own (`impact_analysis`: a zone axis)."""
+    zones = len(scene.pair.contact_zones())
+    if zones > 1:
+        raise ValueError(
+            f"{what} needs a pair of one contact zone; {type(scene.pair).__name__} has {zones}, each with its own "
+            "mesh-in impact: run simulate for each load and speed"
+        )
+
+
 def _hub_radius(pair: AbstractGearPair, hub_radius) -> jax.Array:
     """Hub radii (mm), shape (..., 2), default half the root radii; inside the root circles."""
     if hub_radius is None:

@@ -55,7 +55,7 @@ def test_a_point_load_deflects_as_the_slices_shear_layer_does(z):
     matrix = pasternak_compliance(jnp.full(n, section), dz, decay)
     # the slice's load acts at its centre; the end slice's centre is dz/2 inside the face
     closed = float(point_load_compliance(section, decay, centres[j], width))
-    assert float(matrix[j, j]) == pytest.approx(closed, rel=2e-3)
+    assert float(matrix[j, j]) == pytest.approx(closed, rel=1e-5)
     if z == 0.0:
         assert closed == pytest.approx(section / (2 * decay), rel=1e-5)
     if z == 27.5:

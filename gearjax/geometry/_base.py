@@ -126,6 +126,7 @@ class AbstractGearPair(eqx.Module):
         supported_effects: the stages beyond the rigid TCA it supports, a subset of
             `EFFECTS` = ("ltca", "impact"); `Scene` refuses the others.
         effects_note: what to use instead of an unsupported stage (for the error message).
+        zone_names: the contact zones' names, in the order of `contact_zones()`.
         scene_file: its `[pair]` keys in scene files (`SceneFileSpec`), or None for a
             family that scene files cannot name.
     """
@@ -137,7 +138,6 @@ class AbstractGearPair(eqx.Module):
     supported_effects: AbstractClassVar[frozenset[str]]
     effects_note: ClassVar[str] = ""
     scene_file: ClassVar[SceneFileSpec | None] = None
-    #: Names of the contact zones, in the order of `contact_zones()` (reports).
     zone_names: ClassVar[tuple[str, ...]] = ("drive flank",)
 
     @abc.abstractmethod

@@ -59,7 +59,8 @@ class ImpactResult(eqx.Module):
     Units: angular transmission-error quantities are in rad (gear 2) and carry no suffix
     (`loaded_te`); along the transverse line of action they are in mm with the suffix
     `_line` (as `TCAResult.transmission_error_line`). For a pair of several contact zones
-    (double circular arc) every field has a leading zone axis.
+    (double circular arc) every field has a zone axis, leading (after the batch axes of a
+    batched call; the sweeps keep one zone, `check_one_zone`).
 
     Attributes:
         result: `RESULTS.successful`, or the first failure of the search:
@@ -165,7 +166,10 @@ def impact_analysis(
         search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
         return _impact_at(ctx, column, search, speed, inertia, found)
     # point contact: each contact zone's incoming pair strikes on its own, in one vmapped search
-    zones = tca.pair_index.shape[0] // len(pairs)
+    zones = len(pair.contact_zones())
+    if tca.pair_index.shape[0] != zones * len(pairs):
+        raise ValueError(f"the TCA's pair axis must hold each of the {zones} zones' window {pairs}; "
+                         f"got {tca.pair_index.shape[0]} pairs")
     brackets = [bracket(tca, ltca, range(z * len(pairs), (z + 1) * len(pairs))) for z in range(zones)]
     brackets = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *brackets)
 

@@ -327,11 +327,19 @@ def bracket(tca: TCAResult, ltca: LTCAResult, columns=None):
 
     Pair $k$ at pinion angle $\\varphi_1$ is pair 0 at $\\varphi_1 - kp$, so ordering the
     grid by descending pair and ascending angle follows one tooth through the mesh. The
-    gap at `upper` is the scene's, with pair $k$ loaded: it only seeds the first step.
+    gap at `upper` is the scene's, with pair $k$ loaded: it only seeds the first step. On
+    point-contact flanks the offsets are the located peaks and the loaded TE counts from
+    the largest of them, as in `evaluate`.
     """
-    offsets = jnp.max(jnp.where(tca.valid, tca.slice_te, -jnp.inf), axis=-1)  # (pos, pair)
+    if ltca.point_contact is None:
+        offsets = jnp.max(jnp.where(tca.valid, tca.slice_te, -jnp.inf), axis=-1)  # (pos, pair)
+        loaded = ltca.transmission_error
+    else:
+        located = closest_contact(tca)
+        offsets = jnp.where(jnp.isfinite(located["gap"]), located["te"], -jnp.inf)
+        loaded = jnp.max(offsets, axis=-1) - ltca.rotation
     columns = np.arange(offsets.shape[-1]) if columns is None else np.asarray(columns)
-    h = offsets[:, columns] - ltca.transmission_error[:, None]
+    h = offsets[:, columns] - loaded[:, None]
     n_pos, n_pair = h.shape
     line = h[:, ::-1].T.reshape(-1)
     tracked = jnp.repeat(jnp.asarray(columns)[::-1], n_pos)

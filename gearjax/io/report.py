@@ -230,11 +230,12 @@ def summary(out: dict) -> str:
             lines.append(f"  warning: {enum_message(getattr(RESULTS, lt['result']))}")
     for im in _impacts(out):
         zone = f", {im['zone']}" if "zone" in im else ""
+        parameter = "profile parameter" if "zone" in im else "roll length"  # involute flanks: roll lengths
         lines += [
             f"Mesh-in impact{zone} ({im['regime']} strike: {CONTACT_WORDS.get(im['contact_kind'], im['contact_kind'])})",
             f"  impact force               F_s = {im['force_N']:.0f} N, normal velocity v_n = {im['velocity_mm_per_s']:.1f} mm/s",
             f"  local stiffness            F = {im['stiffness_coefficient_N_per_mm_n']:.4g} delta^{im['stiffness_exponent']:.3f} (N, mm)",
-            f"  point M                    pinion roll length {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
+            f"  point M                    pinion {parameter} {im['pinion_roll_length_mm']:.3f} mm at z = {im['face_position_mm']:.2f} mm; "
             f"m_eq = {im['equivalent_mass_kg']:.3f} kg",
         ]
         if im["result"] != "successful":

@@ -182,7 +182,7 @@ def parabola_peak(left: ArrayLike, here: ArrayLike, right: ArrayLike) -> tuple[A
     concave = curvature < 0.0
     safe = jnp.where(concave, curvature, -1.0)
     x = jnp.where(concave, jnp.clip(-(right - left) / (2.0 * safe), -1.0, 1.0), 0.0)
-    return x, here + 0.5 * x * (right - left) + 0.5 * x * x * safe * concave, concave
+    return x, here + 0.5 * x * (right - left) + 0.5 * x * x * safe, concave  # x = 0 where not concave
 
 
 def closest_contact(tca: TCAResult) -> dict[str, Array]:

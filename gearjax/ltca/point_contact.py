@@ -74,7 +74,8 @@ def point_load_compliance(section: ArrayLike, decay_length: ArrayLike, z: ArrayL
     tooth of `face_width` $b$ (mm) whose compliance per unit face width is `section` (mm²/N),
     spread along the face with `decay_length` $\\lambda$ (mm): the module's Green's function,
     as $\\frac{c_t}{2\\lambda}(1 + e^{-2a})(1 + e^{-2c})/(1 - e^{-2(a + c)})$ with
-    $a, c = (b/2 \\pm z)/\\lambda$ (no overflow for any $b/\\lambda$)."""
+    $a, c = (b/2 \\pm z)/\\lambda$ (no overflow for any $b/\\lambda$); `z` is clipped to the
+    face."""
     half = 0.5 * face_width
     z = jnp.clip(z, -half, half)
     a, c = (half + z) / decay_length, (half - z) / decay_length

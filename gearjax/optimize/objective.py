@@ -41,7 +41,7 @@ from ..geometry.errors import MeshErrors
 from ..geometry.modification import FlankModification
 from .. import pipeline
 from ..impact import ImpactRegime
-from ..scene import Scene
+from ..scene import Scene, check_one_zone
 from .space import modification_from_design
 
 #: The objective's quantities $q$: name -> (unit, what it is, its value from the impact's
@@ -162,6 +162,7 @@ class Objective(eqx.Module):
                 "the optimisation needs a scene with a torque and effects including 'impact' "
                 "(OperatingPoint(torque_Nm=...), effects=('impact',))"
             )
+        check_one_zone(scene, "the optimisation")
         if scene.modification is None:  # an unmodified pair: the search starts from it
             scene = dataclasses.replace(scene, modification=FlankModification())
         check_choice("quantity (objective)", quantity, tuple(QUANTITIES))

@@ -31,7 +31,6 @@ generated surfaces (`handover_impacts`).
 from __future__ import annotations
 
 import json
-
 import math
 
 import equinox as eqx

@@ -11,7 +11,7 @@ from ..impact import ImpactResult
 from ..ltca import LTCAResult
 from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
 from ..runtime.resources import check_memory
-from ..scene import Scene, check_loaded_accuracy, stack_scenes
+from ..scene import Scene, check_loaded_accuracy, check_one_zone, stack_scenes
 from ..units import rad_per_s_to_rpm
 from ._axes import _speeds, _torques
 from .devices import _devices, _per_device, _rows
@@ -94,6 +94,8 @@ def design_sweep(
         stacked = stack_scenes(scenes)
     if speeds is not None and "impact" not in stacked.effects:
         raise ValueError("design_sweep with speeds needs scenes with effects including 'impact' (and so a torque)")
+    if speeds is not None:
+        check_one_zone(stacked, "design_sweep with speeds")
     devices = _devices(devices)
     check_loaded_accuracy(stacked.compliance, stacked.accuracy)
     check_memory(stacked, loads=torques.shape[0], what="design_sweep")

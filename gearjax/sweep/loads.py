@@ -12,7 +12,7 @@ from ..impact import ImpactResult
 from ..ltca import LTCAResult
 from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
 from ..runtime.resources import check_memory
-from ..scene import Scene, check_loaded_accuracy
+from ..scene import Scene, check_loaded_accuracy, check_one_zone
 from ..tca import TCAResult
 from ..units import rad_per_s_to_rpm
 from ._axes import _speeds, _torques
@@ -132,6 +132,7 @@ def impact_sweep(
     speeds = _speeds(speeds, speeds_rpm)
     if "impact" not in scene.effects:
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
+    check_one_zone(scene, "impact_sweep")
     devices = _devices(devices)
     check_memory(scene, loads=-(-torques.shape[0] // (1 if devices is None else len(devices))), what="impact_sweep")
     scene = prepare(scene)

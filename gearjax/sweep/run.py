@@ -32,7 +32,7 @@ import numpy as np
 from .._validate import check_int
 from ..io.progress import Progress, compiling
 from ..io.rundir import RunDirectory, atomic_write
-from ..scene import Scene
+from ..scene import Scene, check_one_zone
 
 #: Keys of `sweep_rows` whose values have one entry per torque (the rest are per run).
 _PER_RUN = ("speed_rpm", "accuracy", "wall_time_s", "chunks", "chunk_length", "files")
@@ -73,6 +73,7 @@ def run_impact_sweep(
     torques_Nm, speeds_rpm = np.asarray(torques_Nm, dtype=float), np.asarray(speeds_rpm, dtype=float)
     if "impact" not in scene.effects:
         raise ValueError("run_impact_sweep needs a scene with effects including 'impact' (and so a torque)")
+    check_one_zone(scene, "an impact sweep")
     count = torques_Nm.shape[0]
     length = count if chunk is None else check_int("chunk", chunk, 1)
     length = min(length, count)

@@ -13,7 +13,7 @@ from .._solution import RESULTS, SimulationError, enum_name
 from .._validate import check_range
 from ..impact import ImpactRegime
 from ..pipeline import precision, prepare
-from ..scene import Scene, stack_scenes
+from ..scene import Scene, check_one_zone, stack_scenes
 from ._axes import _one_of
 
 
@@ -74,9 +74,8 @@ def regime_transition(
         raise ValueError("scene must be a Scene or a non-empty list of Scene objects")
     if any("impact" not in sc.effects for sc in scenes):
         raise ValueError("regime_transition needs a scene with effects including 'impact'")
-    if any(len(sc.pair.contact_zones()) > 1 for sc in scenes):
-        raise ValueError("regime_transition needs a pair of one contact zone (one incoming pair per pitch); "
-                         "a double-circular-arc pair's zones each have their own impact: use load_sweep")
+    for sc in scenes:
+        check_one_zone(sc, "regime_transition")
     stacked = prepare(stack_scenes(scenes))
     arrays, static = eqx.partition(stacked, eqx.is_array)
     with precision(stacked.accuracy):
