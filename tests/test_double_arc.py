@@ -215,7 +215,7 @@ def test_four_state_speed_input(kwargs, match):
         four_state_impact(SEED_PAIR, 0.1, **kwargs)
 
 
-def test_double_arc_scene_file_and_no_impact_stage():
+def test_double_arc_scene_file_and_its_stages():
     from gearjax.scene import OperatingPoint, Scene
     from gearjax.io.scene_file import SceneFileError, scene_from_dict
 
@@ -228,5 +228,7 @@ def test_double_arc_scene_file_and_no_impact_stage():
     bad = {"pair": dict(data["pair"], pressure_angle_deg=20.0)}
     with pytest.raises((SceneFileError, ValueError), match="pressure_angle_deg"):
         scene_from_dict(bad)
-    with pytest.raises(ValueError, match="not available"):
-        Scene(SEED_PAIR, operating=OperatingPoint(torque=100.0), effects=("impact",))
+    # the pair has both stages; a zone alone has neither (the loaded contact spans both zones)
+    assert Scene(SEED_PAIR, operating=OperatingPoint(torque=100.0), effects=("impact",)).effects == {"ltca", "impact"}
+    with pytest.raises(ValueError, match="not available for DoubleArcZone.*load the DoubleArcGearPair"):
+        Scene(SEED_PAIR.contact_zones()[1], operating=OperatingPoint(torque=100.0), effects=("impact",))
