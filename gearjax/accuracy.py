@@ -112,6 +112,19 @@ class Accuracy(eqx.Module):
         check_choice("accuracy preset", name, tuple(PRESETS))
         return PRESETS[name]
 
+    @classmethod
+    def from_spec(cls, spec: str) -> "Accuracy":
+        """`PRESET` or `PRESET@PxS`: the preset with P positions per pitch and S face
+        slices (e.g. "default@64x41"), as the study tools take it on their command line."""
+        name, _, grid = spec.partition("@")
+        accuracy = cls.preset(name)
+        if not grid:
+            return accuracy
+        sizes = grid.lower().split("x")
+        if len(sizes) != 2 or not all(v.isdigit() for v in sizes):
+            raise ValueError(f"accuracy must be PRESET or PRESET@PxS (e.g. default@64x41); got {spec!r}")
+        return accuracy.replace(positions_per_pitch=int(sizes[0]), face_slices=int(sizes[1]))
+
     def newton_tolerances(self, dtype) -> tuple[float, float]:
         """`(rtol, atol)`: `newton_rtol`, `newton_atol` floored near the precision of
         `dtype` (`floored_tolerances`)."""

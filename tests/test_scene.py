@@ -102,3 +102,14 @@ def test_stacked_designs_run_batched_and_match_single_runs():
 def test_stacking_refuses_mixed_structures(seed_pair):
     with pytest.raises(ValueError, match="share one structure"):
         stack_scenes([Scene(seed_pair, accuracy=TINY), Scene(seed_pair, paper_optimum(), accuracy=TINY)])
+
+
+def test_an_accuracy_spec_names_a_preset_and_its_grid():
+    fine = Accuracy.from_spec("default@64x41")
+    assert (fine.positions_per_pitch, fine.face_slices) == (64, 41)
+    assert fine.replace(positions_per_pitch=32, face_slices=21) == Accuracy.from_spec("default")
+    for bad in ("default@64", "default@64x", "default@ax41"):
+        with pytest.raises(ValueError, match="PRESET@PxS"):
+            Accuracy.from_spec(bad)
+    with pytest.raises(ValueError, match="accuracy preset"):
+        Accuracy.from_spec("medium@64x41")

@@ -34,11 +34,9 @@ from gearjax.papers.double_arc import seed_scene_file  # noqa: E402
 
 def scene_text(accuracy: str, torque_nm: float, speed_rpm: float) -> str:
     """The seed pair's scene file with the impact, at `accuracy` (`PRESET` or `PRESET@PxS`)."""
-    preset, _, grid = accuracy.partition("@")
-    analysis = {"accuracy": preset, "effects": ["impact"]}
-    if grid:
-        positions, slices = (int(v) for v in grid.split("x"))
-        analysis |= {"positions_per_pitch": positions, "face_slices": slices}
+    grid = gj.Accuracy.from_spec(accuracy)
+    analysis = {"accuracy": accuracy.partition("@")[0], "effects": ["impact"],
+                "positions_per_pitch": grid.positions_per_pitch, "face_slices": grid.face_slices}
     return seed_scene_file(torque_nm, speed_rpm, analysis)
 
 

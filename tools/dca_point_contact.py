@@ -48,21 +48,11 @@ from gearjax.papers.meshing_stiffness import meshing_stiffness  # noqa: E402
 WINDOW = (-2, -1, 0, 1, 2, 3)
 
 
-def parse_accuracy(spec: str) -> gj.Accuracy:
-    """`PRESET` or `PRESET@PxS` (positions per pitch × face slices)."""
-    name, _, grid = spec.partition("@")
-    accuracy = gj.Accuracy.preset(name)
-    if grid:
-        positions, slices = (int(v) for v in grid.lower().split("x"))
-        accuracy = accuracy.replace(positions_per_pitch=positions, face_slices=slices)
-    return accuracy
-
-
 def figures(accuracy: str, torque_Nm: float) -> dict:
     pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
                                 SEED_CASE["face_width"], 0.0)
     start = time.perf_counter()
-    grid = parse_accuracy(accuracy)
+    grid = gj.Accuracy.from_spec(accuracy)
     tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy=grid), throw=False).tca
     r = eqx.filter_jit(point_contact_analysis)(pair.resolve(), tca, jnp.asarray(1e3 * torque_Nm))
     jax.block_until_ready(r.rotation)
@@ -106,7 +96,7 @@ def figures(accuracy: str, torque_Nm: float) -> dict:
 def peak_errors(accuracy: str, slice_counts: list[int]) -> list[dict]:
     pair = gj.DoubleArcGearPair(SEED_CASE["teeth"], SEED_CASE["normal_module"], SEED_CASE["helix_angle_deg"],
                                 SEED_CASE["face_width"], 0.0)
-    grid = parse_accuracy(accuracy)
+    grid = gj.Accuracy.from_spec(accuracy)
     tca = gj.simulate(gj.Scene(pair, pairs=WINDOW, accuracy=grid), throw=False).tca
     um = 1e3 * float(tca.action_radius[1])
     n_mid = tca.slice_z.shape[-1] - 2  # the last two slices are the face ends
