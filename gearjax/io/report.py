@@ -100,9 +100,9 @@ def impact_dict(scene: Scene, result: SimulationResult) -> dict:
     """The impact's figures; for a pair of several contact zones (double circular arc),
     `{"zones": [...]}`, one entry per zone's incoming pair with its `zone` name."""
     imp = result.impact
-    if np.ndim(imp.force) == 0:
+    names = scene.pair.zone_names  # the impact has a zone axis where the pair has several zones
+    if len(names) == 1:
         return _one_impact(imp, result.ltca.action_radius)
-    names = scene.pair.zone_names
     return {"zones": [{"zone": names[z]} | _one_impact(jax.tree_util.tree_map(lambda x: x[z], imp),
                                                        result.ltca.action_radius)
                       for z in range(len(names))]}
