@@ -69,6 +69,38 @@ def test_the_rotation_rate_is_the_inverse_mesh_stiffness(loaded):
                                rtol=0, atol=1e-15)
 
 
+def test_the_lte_derivatives_in_torque_and_axial_pitch_error_match_finite_differences(loaded):
+    """dLTE/dT1 (the program's own forward derivative through the load sharing, minus
+    `rotation_rate`) and dLTE/dΔα (`jax.jvp` through the TCA and the load sharing) against
+    central differences of the fixture's program, at 100 N·m and Δα = 50 µm (off Δα = 0,
+    where the TE, the largest of the pairs', has a kink); steps 0.1 % of the torque, 0.1 µm."""
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    scene, _, _ = loaded
+
+    def lte(torque, error):
+        s = eqx.tree_at(lambda s: (s.operating.torque, s.pair.axial_pitch_error), scene, (torque, error))
+        return gj.simulate(s, throw=False).ltca  # outside a jit: the fixture's program (leaves)
+
+    torque, error = jnp.asarray(scene.operating.torque), jnp.asarray(0.05)
+    h_torque, h_error = 1e-3 * torque, 1e-4
+    d_torque = (lte(torque + h_torque, error).transmission_error
+                - lte(torque - h_torque, error).transmission_error) / (2 * h_torque)
+    d_error = (lte(torque, error + h_error).transmission_error
+               - lte(torque, error - h_error).transmission_error) / (2 * h_error)
+    here = lte(torque, error)
+    assert gj.enum_name(here.result) == "successful" and np.all(np.asarray(here.converged))
+    scale = np.max(np.abs(np.asarray(d_torque)))
+    np.testing.assert_allclose(-np.asarray(here.rotation_rate), np.asarray(d_torque), rtol=0, atol=1e-5 * scale)
+    _, tangent = eqx.filter_jit(
+        lambda e: jax.jvp(lambda e: lte(torque, e).transmission_error, (e,), (jnp.ones_like(e),)))(error)
+    scale = np.max(np.abs(np.asarray(d_error)))
+    assert scale > 1e-4  # rad/mm: the error tilts the TE
+    np.testing.assert_allclose(np.asarray(tangent), np.asarray(d_error), rtol=0, atol=1e-5 * scale)
+
+
 def test_the_scene_refuses_coarse_slices_float32_and_line_compliance():
     pair = _pair()
     torque = gj.OperatingPoint(torque=1.0e5)
