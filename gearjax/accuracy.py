@@ -14,6 +14,7 @@ dependence).
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -116,14 +117,14 @@ class Accuracy(eqx.Module):
     def from_spec(cls, spec: str) -> "Accuracy":
         """`PRESET` or `PRESET@PxS`: the preset with P positions per pitch and S face
         slices (e.g. "default@64x41"), as the study tools take it on their command line."""
-        name, _, grid = spec.partition("@")
+        name, at, grid = spec.partition("@")
         accuracy = cls.preset(name)
-        if not grid:
+        if not at:
             return accuracy
-        sizes = grid.lower().split("x")
-        if len(sizes) != 2 or not all(v.isdigit() for v in sizes):
+        sizes = re.fullmatch(r"([0-9]+)[xX]([0-9]+)", grid)
+        if sizes is None:
             raise ValueError(f"accuracy must be PRESET or PRESET@PxS (e.g. default@64x41); got {spec!r}")
-        return accuracy.replace(positions_per_pitch=int(sizes[0]), face_slices=int(sizes[1]))
+        return accuracy.replace(positions_per_pitch=int(sizes[1]), face_slices=int(sizes[2]))
 
     def newton_tolerances(self, dtype) -> tuple[float, float]:
         """`(rtol, atol)`: `newton_rtol`, `newton_atol` floored near the precision of

@@ -273,8 +273,7 @@ def check_codes(by_stage: dict) -> None:
             continue
         names = sorted(set(np.atleast_1d(enum_name(codes))[np.atleast_1d(failed)].tolist()))
         details = " ".join(f"[{name}] {enum_message(getattr(RESULTS, name))}" for name in names)
-        # entries: a batch's designs and, for a pair of several contact zones, its zones' impacts
-        where = f" in {int(failed.sum())} of {failed.size} entries (a batch's designs × the pair's contact zones)" if failed.ndim else ""
+        where = f" in {int(failed.sum())} of {failed.size} entries (designs, loads, speeds or contact zones)" if failed.ndim else ""
         text = (
             f"simulate: the {stage.upper()} stage failed{where}. {details} "
             f"Pass throw=False to get the results with their codes (result.{stage}.result)."

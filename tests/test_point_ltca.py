@@ -1,8 +1,9 @@
 """The loaded contact of a double-circular-arc pair through the stage chain: a scene file
 with a torque, run by `gearjax run --no-cache` and by `simulate` (one compiled program:
 `simulate`'s, which the command compiles without its program cache), its slice layout
-against its own point contacts, and the scene's checks
-(`ToothSectionCompliance.min_face_slices`, float64); the impact is `test_point_impact`'s."""
+against its own point contacts, the scene's checks (`ToothSectionCompliance.min_face_slices`,
+float64), and the loaded TE's derivatives (a second program: the forward derivative in Δα);
+the impact is `test_point_impact`'s."""
 
 from __future__ import annotations
 
@@ -84,7 +85,7 @@ def test_the_lte_derivatives_in_torque_and_axial_pitch_error_match_finite_differ
         s = eqx.tree_at(lambda s: (s.operating.torque, s.pair.axial_pitch_error), scene, (torque, error))
         return gj.simulate(s, throw=False).ltca  # outside a jit: the fixture's program (leaves)
 
-    torque, error = jnp.asarray(scene.operating.torque), jnp.asarray(0.05)
+    torque, error = jnp.asarray(scene.operating.torque), scene.pair.axial_pitch_error + 0.05  # not weak-typed
     h_torque, h_error = 1e-3 * torque, 1e-4
     d_torque = (lte(torque + h_torque, error).transmission_error
                 - lte(torque - h_torque, error).transmission_error) / (2 * h_torque)
