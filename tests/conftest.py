@@ -49,9 +49,9 @@ gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False
 #: (`GEARJAX_TEST_PROFILE` and `tools/test_profile.py`). Only the schedule uses them: the
 #: order matters, not the values; most of each is tracing and compiling.
 FILE_COSTS = {
-    "test_optimize.py": 525, "test_sweep.py": 308, "test_impact.py": 282, "test_notebooks.py": 274,
+    "test_optimize.py": 525, "test_sweep.py": 308, "test_impact.py": 282, "test_notebooks.py": 230,
     "test_hard_cases.py": 143, "test_ltca.py": 138, "test_impact_convergence.py": 135, "test_results.py": 130,
-    "test_point_impact.py": 865, "test_point_ltca.py": 150, "test_hard_cases_double_arc.py": 106,
+    "test_point_impact.py": 1000, "test_point_ltca.py": 650, "test_hard_cases_double_arc.py": 106,
     "test_hard_cases_curvilinear.py": 100, "test_tca.py": 80,
     "test_cli.py": 80, "test_transforms.py": 70, "test_scene.py": 58, "test_hard_cases_ratios.py": 54,
     "test_curvilinear.py": 45, "test_cache.py": 29, "test_designs.py": 27, "test_double_arc.py": 22,
