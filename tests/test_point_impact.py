@@ -17,6 +17,7 @@ from gearjax.io.report import summary
 from gearjax.papers.double_arc import SEED_CASE, seed_scene_file
 
 from _cases import run_scene_file
+from _notebooks import execute_in_process
 
 SCENE = seed_scene_file(torque_Nm=100.0, speed_rpm=200.0, analysis={"effects": ["impact"]})
 
@@ -85,6 +86,15 @@ def test_each_zones_first_contact_is_the_root_of_its_gap(struck):
         root = imp.pinion_angle[z]
         assert abs(float(gap(column, root))) < 1e-9  # rad
         assert float(gap(column, root - 2e-4)) < 0.0
+
+
+def test_notebook_02_runs(struck):
+    """Notebook 02 top to bottom on its coarse grid (its cells assert what they show); its
+    loaded section builds in Python the scene this file reads from a scene file, and gets
+    the same strikes at 100 N·m and Δα = 0."""
+    _, result, _ = struck
+    namespace = execute_in_process("02_double_circular_arc.ipynb")
+    np.testing.assert_allclose(namespace["values"][0.0, 100.0][2:], np.asarray(result.impact.force), rtol=1e-12)
 
 
 def test_impact_studies_that_keep_one_impact_refuse_a_pair_of_two_zones():
