@@ -32,7 +32,7 @@ notebooks:
 
 # Benchmarks are not tests: they time things and write benchmarks/results/*.json.
 bench:
-	sh tools/setup_env.sh $(VENV) plot $(PYTHON)
+	sh tools/setup_env.sh $(VENV) bench $(PYTHON)
 	$(BIN)/python benchmarks/tca.py
 
 clean:

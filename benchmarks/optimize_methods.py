@@ -1,0 +1,443 @@
+"""Optimisation methods compared on the certified mesh-in impact objective.
+
+    python benchmarks/optimize_methods.py [--objectives force_1000 spectrum] [--seeds 5]
+        [--budget 1200] [--methods ga gradient ga_gradient cma_es differential_evolution]
+        [--accuracy default] [--certify reference] [--plot]
+
+Seed 001's pair at 5 000 rpm with seed 001's design space; two objectives: `force_1000`
+(F_s at 1 000 N·m) and `spectrum` (mean F_s over 400/1 000/1 600 N·m). Every method starts
+from scratch (the paper's optimum lies outside the bounds), searches the unit cube at the
+search accuracy through the same compiled `Objective.batch` program, and gets the same
+budget of objective evaluations (one evaluation: one design over all the objective's
+loads). A value-and-gradient call counts as `gradient_cost` evaluations, the ratio of
+its measured time to a forward call of the same batch, measured in this run.
+
+Methods:
+* `ga`: gearjax's GA (`ga_init`/`ga_ask`/`ga_tell`), population 40.
+* `gradient`: gearjax's multi-start projected Adam (`gradient_init`/`gradient_step`),
+  10 Latin-hypercube starts; it stops when every start has stopped.
+* `ga_gradient`: the GA (population 20) for half the budget, then the 10 best distinct
+  members of its population polished by projected Adam (learning rate 0.02).
+* `cma_es`: CMA-ES, the reference implementation (`cma`), population 10, sigma0 0.3,
+  box-bounded; non-finite values are given to it as 1e6 N.
+* `differential_evolution`: SciPy's, population 30 (popsize 5), `vectorized`,
+  `updating="deferred"`, no polish; non-finite values as 1e6 N.
+
+Certification: the running best design of each run at the checkpoints (a fixed grid of
+evaluation counts, CHECKPOINTS, and the run's end) is evaluated again at the
+certification accuracy. A run's certified best is the lowest certified value among them;
+`evaluations_to_1pct` is the first checkpoint at which that running certified best is
+within 1 % of the lowest certified value any run found for the objective (its resolution
+is the grid's).
+
+Long runs lose nothing: every finished run is written at once to
+`benchmarks/results/optimize_methods_runs.json` (its log of improvements), every
+certified design to the same file, and a rerun skips what is there. The summary in the
+issue's form goes to `benchmarks/results/optimize_methods.json`, the figure (median
+certified running best against evaluations) to `docs/figures/optimize_methods.png`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import equinox as eqx  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+from _common import RESULTS, machine  # noqa: E402
+
+import gearjax as gj  # noqa: E402
+from gearjax import optimize as go  # noqa: E402
+from gearjax.optimize.batch import batch_objective, batch_value_and_grad  # noqa: E402
+from gearjax.optimize.certification import certification_accuracy, with_accuracy  # noqa: E402
+from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
+
+OBJECTIVES = {"force_1000": [1000.0], "spectrum": [400.0, 1000.0, 1600.0]}
+METHODS = ("ga", "gradient", "ga_gradient", "cma_es", "differential_evolution")
+CHECKPOINTS = (25, 50, 75, 100, 150, 200, 300, 400, 600, 800, 1000, 1200, 1600, 2400)
+CHUNK = STARTS = 10  # designs per program call; gradient starts
+PENALTY = 1e6
+RUNS_FILE = RESULTS / "optimize_methods_runs.json"
+
+
+def objective_for(name: str, accuracy: str) -> go.Objective:
+    scene = gj.Scene(seed_pair(), paper_optimum(), effects=("impact",), accuracy=accuracy,
+                     operating=gj.OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0))
+    return go.Objective.create(scene, torques_Nm=OBJECTIVES[name])
+
+
+class Counter:
+    """Counts evaluations and logs every improvement of the running best (evaluations at
+    it, value, unit-cube design) of one run."""
+
+    def __init__(self, objective, space, budget, gradient_cost):
+        self.objective, self.space, self.budget, self.gradient_cost = objective, space, budget, gradient_cost
+        self.evaluations, self.best, self.log = 0.0, np.inf, []
+
+    @property
+    def left(self) -> float:
+        return self.budget - self.evaluations
+
+    def _note(self, units, values, cost):
+        for i, value in enumerate(values):
+            if np.isfinite(value) and value < self.best:
+                self.best = float(value)
+                self.log.append([self.evaluations + cost * (i + 1), self.best, [float(u) for u in units[i]]])
+        self.evaluations += cost * len(values)
+
+    def values(self, units) -> np.ndarray:
+        """The objective at unit-cube points (n, 6), padded to CHUNK rows per program call."""
+        units = np.clip(np.atleast_2d(np.asarray(units, float)), 0.0, 1.0)
+        out = []
+        for start in range(0, len(units), CHUNK):
+            part = units[start:start + CHUNK]
+            padded = np.concatenate([part, np.repeat(part[-1:], CHUNK - len(part), axis=0)])
+            out.append(np.asarray(batch_objective(self.objective, self.space.to_design(jnp.asarray(padded))))[: len(part)])
+        values = np.concatenate(out)
+        self._note(units, values, 1.0)
+        return values
+
+    def value_and_grad(self, units):
+        values, grads = batch_value_and_grad(self.objective, self.space, jnp.asarray(units))
+        values = np.asarray(values)
+        self._note(np.asarray(units), values, self.gradient_cost)
+        return values, grads
+
+
+def run_ga(counter: Counter, seed: int, population: int = 40, fraction: float = 1.0) -> go.GAState:
+    config = go.GAConfig(population=population)
+    ask = eqx.filter_jit(lambda s: go.ga_ask(s, config))
+    tell = eqx.filter_jit(lambda s, c, f: go.ga_tell(s, c, f, config))
+    state = go.ga_init(jax.random.PRNGKey(seed), config, 6)
+    while counter.left - (1.0 - fraction) * counter.budget >= population:
+        candidates, state = ask(state)
+        values = counter.values(candidates)
+        state = tell(state, candidates, jnp.asarray(values))
+    return state
+
+
+def run_gradient(counter: Counter, seed: int, initial=None, learning_rate: float = 0.05) -> None:
+    iterations = max(1, int(counter.left // (STARTS * counter.gradient_cost)))
+    config = go.GradientConfig(starts=STARTS, iterations=iterations, learning_rate=learning_rate)
+    step = eqx.filter_jit(lambda s, v, g: go.gradient_step(s, v, g, config))
+    state = go.gradient_init(jax.random.PRNGKey(seed), config, 6, initial)
+    for _ in range(iterations):
+        if not bool(jnp.any(state.active)) or counter.left < STARTS * counter.gradient_cost:
+            break
+        values, grads = counter.value_and_grad(state.position)
+        state = step(state, jnp.asarray(values), grads)
+
+
+def run_ga_gradient(counter: Counter, seed: int) -> None:
+    state = run_ga(counter, seed, population=20, fraction=0.5)
+    fitness = np.asarray(state.fitness)
+    order = [int(i) for i in np.argsort(fitness) if np.isfinite(fitness[i])]
+    population = np.asarray(state.population)
+    distinct = []
+    for i in order:
+        if all(np.max(np.abs(population[i] - population[j])) > 1e-6 for j in distinct):
+            distinct.append(i)
+    run_gradient(counter, seed + 1000, initial=population[distinct[:STARTS]] if distinct else None, learning_rate=0.02)
+
+
+def run_cma(counter: Counter, seed: int) -> None:
+    import cma
+
+    x0 = np.random.default_rng(seed).uniform(0.2, 0.8, 6)
+    es = cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "popsize": CHUNK, "seed": seed + 1, "verbose": -9})
+    while counter.left >= CHUNK:
+        x = es.ask()
+        values = counter.values(np.asarray(x))
+        es.tell(x, [float(v) if np.isfinite(v) else PENALTY for v in values])
+
+
+def run_de(counter: Counter, seed: int) -> None:
+    from scipy.optimize import differential_evolution
+
+    size = 5 * 6
+
+    def f(x):  # x: (6, S)
+        values = counter.values(np.asarray(x).T)
+        return np.where(np.isfinite(values), values, PENALTY)
+
+    differential_evolution(f, [(0.0, 1.0)] * 6, popsize=5, maxiter=max(0, int(counter.left // size) - 1), tol=0.0,
+                           atol=0.0, seed=seed, vectorized=True, updating="deferred", polish=False,
+                           init="latinhypercube")
+
+
+RUNNERS = {"ga": run_ga, "gradient": run_gradient, "ga_gradient": run_ga_gradient, "cma_es": run_cma,
+           "differential_evolution": run_de}
+
+
+def gradient_cost(objective, space, repeats: int = 3) -> dict:
+    """Time of a value-and-gradient call of STARTS designs over a forward call of the same
+    designs (compiled apart, medians)."""
+    units = jax.random.uniform(jax.random.PRNGKey(7), (STARTS, 6), jnp.float64)
+    designs = space.to_design(units)
+
+    def median(fn):
+        jax.block_until_ready(fn())
+        runs = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            jax.block_until_ready(fn())
+            runs.append(time.perf_counter() - t0)
+        return statistics.median(runs)
+
+    forward = median(lambda: batch_objective(objective, designs))
+    both = median(lambda: batch_value_and_grad(objective, space, units))
+    return {"forward_s": forward, "value_and_grad_s": both, "ratio": both / forward}
+
+
+def load_runs() -> dict:
+    return json.loads(RUNS_FILE.read_text()) if RUNS_FILE.exists() else {"runs": {}, "certified": {}}
+
+
+def save_runs(data: dict) -> None:
+    tmp = RUNS_FILE.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=1))
+    tmp.replace(RUNS_FILE)
+
+
+def checkpoint_designs(run: dict) -> list:
+    """[(checkpoint, unit design of the running best there)] of a run's log."""
+    log, out = run["log"], []
+    for c in [c for c in CHECKPOINTS if c < run["evaluations"]] + [run["evaluations"]]:
+        before = [entry for entry in log if entry[0] <= c + 1e-9]
+        if before:
+            out.append((c, before[-1][2]))
+    return out
+
+
+def key_of(objective_name: str, unit) -> str:
+    return objective_name + ":" + ",".join(f"{u:.12f}" for u in unit)
+
+
+def certify_runs(data: dict, name: str, objective, space, accuracy: str, chunk: int = 6) -> None:
+    """Certify every checkpoint design of the objective's runs not yet certified, `chunk`
+    designs per program call, saving after each call."""
+    target = with_accuracy(objective, certification_accuracy(accuracy))
+    todo = []
+    for run_key, run in data["runs"].items():
+        if run_key.startswith(name + "/"):
+            for _, unit in checkpoint_designs(run):
+                key = key_of(name, unit)
+                if key not in data["certified"] and key not in {k for k, _ in todo}:
+                    todo.append((key, unit))
+    print(f"{name}: certifying {len(todo)} designs at {accuracy}", flush=True)
+    for start in range(0, len(todo), chunk):
+        part = todo[start:start + chunk]
+        units = np.asarray([u for _, u in part] + [part[-1][1]] * (chunk - len(part)))
+        values = np.asarray(batch_objective(target, space.to_design(jnp.asarray(units))))
+        for (key, _), value in zip(part, values):
+            data["certified"][key] = float(value) if np.isfinite(value) else None
+        save_runs(data)
+
+
+def best_designs(data: dict, name: str) -> dict:
+    """{run key: unit design of the run's certified best}."""
+    out = {}
+    for run_key, run in data["runs"].items():
+        if run_key.startswith(name + "/"):
+            scored = [(data["certified"].get(key_of(name, u)), u) for _, u in checkpoint_designs(run)]
+            scored = [(v, u) for v, u in scored if v is not None]
+            if scored:
+                out[run_key] = min(scored, key=lambda vu: vu[0])[1]
+    return out
+
+
+def check_finer(data: dict, name: str, objective, space, spec: str, chunk: int = 6) -> None:
+    """Evaluate every run's certified best again at a finer accuracy (`Accuracy.from_spec`,
+    e.g. "reference@128x161"), stored under `data["finer"][spec]`."""
+    target = with_accuracy(objective, gj.Accuracy.from_spec(spec))
+    finer = data.setdefault("finer", {}).setdefault(spec, {})
+    todo = [(key_of(name, u), u) for u in best_designs(data, name).values()]
+    todo = list({k: u for k, u in todo if k not in finer}.items())
+    print(f"{name}: {len(todo)} certified bests at {spec}", flush=True)
+    for start in range(0, len(todo), chunk):
+        part = todo[start:start + chunk]
+        units = np.asarray([u for _, u in part] + [part[-1][1]] * (chunk - len(part)))
+        values = np.asarray(batch_objective(target, space.to_design(jnp.asarray(units))))
+        for (key, _), value in zip(part, values):
+            finer[key] = float(value) if np.isfinite(value) else None
+        save_runs(data)
+
+
+def certified_trajectory(data: dict, name: str, run: dict) -> list:
+    """[(checkpoint, lowest certified value of the running bests up to it)]."""
+    out, best = [], np.inf
+    for c, unit in checkpoint_designs(run):
+        value = data["certified"].get(key_of(name, unit))
+        if value is not None:
+            best = min(best, value)
+        out.append((c, best if np.isfinite(best) else None))
+    return out
+
+
+def summary(data: dict, names, methods) -> tuple[dict, dict]:
+    """({objective: {method: [one entry per seed]}}, {objective: lowest certified value of
+    any run})."""
+    objectives, best = {}, {}
+    for name in names:
+        runs = {k: r for k, r in data["runs"].items() if k.startswith(name + "/")}
+        trajectories = {k: certified_trajectory(data, name, r) for k, r in runs.items()}
+        finals = [t[-1][1] for t in trajectories.values() if t and t[-1][1] is not None]
+        if not finals:
+            continue
+        best_any = best[name] = min(finals)
+        objectives[name] = {}
+        for method in methods:
+            entries = []
+            for k, run in sorted(runs.items()):
+                if k.split("/")[1] != method:
+                    continue
+                t = trajectories[k]
+                within = [c for c, v in t if v is not None and v <= 1.01 * best_any]
+                entries.append({"seed": run["seed"], "certified_best_N": t[-1][1] if t else None,
+                                "search_best_N": run["log"][-1][1] if run["log"] else None,
+                                "evaluations": round(run["evaluations"], 1),
+                                "evaluations_to_1pct": (int(within[0]) if float(within[0]).is_integer()
+                                                        else round(within[0], 1)) if within else None,
+                                "wall_s": run["wall_s"], "trajectory": t})
+            if entries:
+                objectives[name][method] = entries
+    return objectives, best
+
+
+def plot(objectives: dict, best: dict, path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(objectives), figsize=(6 * len(objectives), 4.2), squeeze=False)
+    for ax, (name, methods) in zip(axes[0], objectives.items()):
+        for method, entries in methods.items():
+            grid = sorted({c for e in entries for c, _ in e["trajectory"]})
+            medians = []
+            for c in grid:
+                values = [min([v for cc, v in e["trajectory"] if cc <= c and v is not None] or [np.inf]) for e in entries]
+                medians.append(np.median(values))
+            ax.step(grid, medians, where="post", label=f"{method} ({len(entries)} seeds)")
+        ax.axhline(1.01 * best[name], color="k", lw=0.6, ls=":", label="best certified + 1 %")
+        ax.set(xscale="log", xlabel="objective evaluations", ylabel="median certified running best F_s (N)",
+               title=name)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
+def add_finer(data: dict, objectives: dict, spec: str) -> dict:
+    """Each entry's certified best at the finer accuracy (`finer_N`); returns per objective
+    the largest relative difference (F_finer - F) / F_finer."""
+    finer, checks = data["finer"][spec], {}
+    for name, methods in objectives.items():
+        bests = best_designs(data, name)
+        diffs = []
+        for method, entries in methods.items():
+            for entry in entries:
+                unit = bests.get(f"{name}/{method}/{entry['seed']}")
+                entry["finer_N"] = None if unit is None else finer.get(key_of(name, unit))
+                if entry["finer_N"] is not None and entry["certified_best_N"] is not None:
+                    diffs.append((entry["finer_N"] - entry["certified_best_N"]) / entry["finer_N"])
+        checks[name] = {"accuracy": spec, "designs": len(bests), "checked": len(diffs),
+                        "largest_relative_difference": max(diffs, key=abs) if diffs else None}
+        print(f"{name}: certified bests at {spec}: {checks[name]}", flush=True)
+    return checks
+
+
+def markdown(objectives: dict, best: dict) -> str:
+    """The results as the docs' table: per objective and method, the median and range of
+    the certified best over the seeds, the seeds within 1 % of the best certified value,
+    and the median evaluations to get there (over the seeds that did)."""
+    def n(x):
+        return f"{x:,.0f}".replace(",", " ")
+
+    lines = ["| objective | method | median certified best (N) | range (N) | seeds within 1 % | "
+             "median evaluations to 1 % | evaluations used | median at the finer check (N) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for name, methods in objectives.items():
+        for method, entries in methods.items():
+            finals = [e["certified_best_N"] for e in entries if e["certified_best_N"] is not None]
+            hits = [e["evaluations_to_1pct"] for e in entries if e["evaluations_to_1pct"] is not None]
+            used = [e["evaluations"] for e in entries]
+            finer = [e.get("finer_N") for e in entries]
+            finer = n(np.median(finer)) if all(f is not None for f in finer) else "—"
+            to_1pct = f"{np.median(hits):.0f} (n = {len(hits)})" if hits else "—"
+            lines.append(f"| {name} | {method} | {n(np.median(finals))} | {n(min(finals))}–{n(max(finals))} | "
+                         f"{len(hits)} of {len(entries)} | {to_1pct} | {np.median(used):.0f} | {finer} |")
+        lines.append(f"| {name} | best of all runs | {n(best[name])} | | | | | |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--objectives", nargs="+", default=list(OBJECTIVES), choices=list(OBJECTIVES))
+    parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=list(METHODS))
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--budget", type=int, default=1200)
+    parser.add_argument("--accuracy", default="default")
+    parser.add_argument("--certify", default="reference")
+    parser.add_argument("--no-certify", action="store_true", help="run the searches only")
+    parser.add_argument("--finer", metavar="SPEC", help="also evaluate each run's certified best at this accuracy "
+                        "(e.g. reference@128x161) and report the largest difference")
+    parser.add_argument("--plot", action="store_true", help="write docs/figures/optimize_methods.png")
+    args = parser.parse_args()
+    if args.seeds < 1 or args.budget < 2 * CHUNK * 4:
+        raise SystemExit("optimize_methods: --seeds must be >= 1 and --budget >= 80")
+    data = load_runs()
+    settings = {"budget": args.budget, "search_accuracy": args.accuracy, "certify": args.certify}
+    stored = data.setdefault("settings", settings)
+    if stored != settings:
+        raise SystemExit(f"optimize_methods: {RUNS_FILE.name} holds runs with {stored}; rerun with those settings "
+                         "or move the file away")
+    for name in args.objectives:
+        objective = objective_for(name, args.accuracy)
+        space = go.DesignSpace.for_scene(objective.scene)
+        cost = data.setdefault("gradient_cost", {}).get(name)
+        if cost is None and any(m in ("gradient", "ga_gradient") for m in args.methods):
+            cost = data["gradient_cost"][name] = gradient_cost(objective, space)
+            save_runs(data)
+            print(f"{name}: value and gradient cost {cost['ratio']:.2f} forward calls", flush=True)
+        for seed in range(args.seeds):
+            for method in args.methods:
+                key = f"{name}/{method}/{seed}"
+                if key in data["runs"]:
+                    continue
+                counter = Counter(objective, space, args.budget, cost["ratio"] if cost else 1.0)
+                t0 = time.perf_counter()
+                RUNNERS[method](counter, seed)
+                wall = time.perf_counter() - t0
+                data["runs"][key] = {"seed": seed, "method": method, "budget": args.budget,
+                                     "accuracy": args.accuracy, "evaluations": counter.evaluations,
+                                     "wall_s": wall, "log": counter.log}
+                save_runs(data)
+                print(f"{key:40s} best {counter.best:9.1f} N after {counter.evaluations:7.1f} evaluations, {wall:6.1f} s",
+                      flush=True)
+        if not args.no_certify:
+            certify_runs(data, name, objective, space, args.certify)
+        if args.finer:
+            check_finer(data, name, objective, space, args.finer)
+    objectives, best = summary(data, args.objectives, args.methods)
+    checks = add_finer(data, objectives, args.finer) if args.finer else {}
+    checkpoints = [c for c in CHECKPOINTS if c < args.budget] + [args.budget]
+    out = {"machine": machine(),
+           "settings": {**settings, "checkpoints": checkpoints, "gradient_cost": data.get("gradient_cost", {})},
+           "best_certified_N": best, "finer_check": checks, "objectives": objectives}
+    (RESULTS / "optimize_methods.json").write_text(json.dumps(out, indent=1, allow_nan=False))
+    print(markdown(objectives, best))
+    if args.plot:
+        from pathlib import Path
+
+        plot(objectives, best, Path(__file__).resolve().parents[1] / "docs" / "figures" / "optimize_methods.png")
+
+
+if __name__ == "__main__":
+    main()
