@@ -232,12 +232,18 @@ def certify_runs(data: dict, name: str, objective, space, accuracy: str, chunk: 
                 if key not in data["certified"] and key not in {k for k, _ in todo}:
                     todo.append((key, unit))
     print(f"{name}: certifying {len(todo)} designs at {accuracy}", flush=True)
+    evaluate_into(data, data["certified"], target, space, todo, chunk)
+
+
+def evaluate_into(data: dict, store: dict, objective, space, todo: list, chunk: int) -> None:
+    """store[key] = the objective at each (key, unit design) of `todo` (None where a stage
+    failed), `chunk` designs per program call, the runs file saved after each call."""
     for start in range(0, len(todo), chunk):
         part = todo[start:start + chunk]
         units = np.asarray([u for _, u in part] + [part[-1][1]] * (chunk - len(part)))
-        values = np.asarray(batch_objective(target, space.to_design(jnp.asarray(units))))
+        values = np.asarray(batch_objective(objective, space.to_design(jnp.asarray(units))))
         for (key, _), value in zip(part, values):
-            data["certified"][key] = float(value) if np.isfinite(value) else None
+            store[key] = float(value) if np.isfinite(value) else None
         save_runs(data)
 
 
@@ -261,13 +267,7 @@ def check_finer(data: dict, name: str, objective, space, spec: str, chunk: int =
     todo = [(key_of(name, u), u) for u in best_designs(data, name).values()]
     todo = list({k: u for k, u in todo if k not in finer}.items())
     print(f"{name}: {len(todo)} certified bests at {spec}", flush=True)
-    for start in range(0, len(todo), chunk):
-        part = todo[start:start + chunk]
-        units = np.asarray([u for _, u in part] + [part[-1][1]] * (chunk - len(part)))
-        values = np.asarray(batch_objective(target, space.to_design(jnp.asarray(units))))
-        for (key, _), value in zip(part, values):
-            finer[key] = float(value) if np.isfinite(value) else None
-        save_runs(data)
+    evaluate_into(data, finer, target, space, todo, chunk)
 
 
 def certified_trajectory(data: dict, name: str, run: dict) -> list:
