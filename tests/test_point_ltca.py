@@ -155,11 +155,13 @@ def test_the_axial_pitch_errors_loaded_effect_is_the_rigid_one_at_light_load(loa
 
 def test_reproduce_dca_json(loaded, capsys):
     """`gearjax reproduce dca --json`: formula (27) and Tables 1–2 as the seed prints them,
-    and our meshing stiffness beside the paper's row (the loaded program of the module's
-    fixture: the seed pair at 100 N·m, the same scene structure), with formula (7)'s
-    forces scaling as the square root of the stiffness."""
-    assert main(["reproduce", "dca", "--json", "--no-cache"]) == 0
+    and our meshing stiffness beside the paper's row, with formula (7)'s forces scaling as
+    the square root of the stiffness. At `--accuracy default` it reuses the module
+    fixture's loaded program (the seed pair at 100 N·m, the same scene structure); the
+    command's own default is the converged 64 × 41 grid, which the validation page checks."""
+    assert main(["reproduce", "dca", "--json", "--no-cache", "--accuracy", "default"]) == 0
     out = json.loads(capsys.readouterr().out)
+    assert "accuracy 'default' (32 positions per pitch, 21 face slices)" in out["mesh_stiffness_setting"]
     for v in out["formula_27_mm"].values():
         assert round(v["gearjax"], 2) == pytest.approx(v["paper"], abs=1e-9)
     for t in ("table1", "table2"):
@@ -172,6 +174,17 @@ def test_reproduce_dca_json(loaded, capsys):
         with_ours, seed = out["tables_with_our_stiffness_paper_units"][t]["gearjax"], out["tables_paper_units"][t]["gearjax"]
         np.testing.assert_allclose(np.asarray(with_ours) / np.asarray(seed), np.sqrt(np.asarray(ours) / np.asarray(paper)),
                                    rtol=1e-12)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["reproduce", "dca", "--accuracy", "fine"], "--accuracy: accuracy preset must be one of"),
+    (["reproduce", "dca", "--accuracy", "default@64"], "--accuracy: accuracy must be PRESET or PRESET@PxS"),
+    (["reproduce", "curvilinear", "--accuracy", "default"], "--accuracy applies to `reproduce dca` only"),
+])
+def test_reproduce_refuses_a_bad_accuracy_before_any_work(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
 
 
 def test_the_meshing_stiffness_is_the_meshs_at_each_hand_over(loaded):

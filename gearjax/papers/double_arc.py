@@ -257,13 +257,21 @@ def seed_scene_file(torque_Nm: float | None = None, speed_rpm: float | None = No
     return "\n".join(lines) + "\n"
 
 
-def reproduce(cross_check: bool = False) -> dict:
+#: the accuracy of `reproduce`'s meshing stiffness: within 0.06 % of 128 positions per pitch
+#: and of 81 face slices in every column, where `default` (32 x 21) is 3.1 % low in one
+#: (`docs/validation.md`)
+STIFFNESS_ACCURACY = "default@64x41"
+
+
+def reproduce(cross_check: bool = False, accuracy: str = STIFFNESS_ACCURACY) -> dict:
     """`gearjax reproduce dca`: formula (27)-(28) for the seed case, the four states at the
     seed's 200 rpm and $\\Delta$ = 0.1 mm, and Tables 1-2 recomputed with formula (7) in the
     paper's mixed units (labelled) and in N, our meshing stiffness (`meshing_stiffness`, the
-    seed pair at 100 N·m, `default` accuracy: compiles the loaded contact, ~2 min the first
-    time) and the tables' forces with it. `cross_check` adds the general TCA on the
-    generated surfaces with the same pitch error, both signs (~2 min, mostly compilation)."""
+    seed pair at 100 N·m, at `accuracy`, a `PRESET` or `PRESET@PxS` spec: compiles the
+    loaded contact, ~3 min the first time at the default 64 x 41) and the tables' forces
+    with it. `cross_check` adds the general TCA on the generated surfaces with the same
+    pitch error, both signs (~2 min, mostly compilation)."""
+    setting = Accuracy.from_spec(accuracy)
     c = SEED_CASE
     facts = axial_meshing(c["normal_module"], c["helix_angle_deg"], c["face_width"])
     pair = seed_pair()
@@ -286,11 +294,12 @@ def reproduce(cross_check: bool = False) -> dict:
             for k, (name, v) in enumerate(zip(STATES, SEED_VELOCITIES))
         ],
     }
-    ours = [float(k) for k in meshing_stiffness(pair, SEED_TORQUE).stiffness]
+    ours = [float(k) for k in meshing_stiffness(pair, SEED_TORQUE, setting).stiffness]
     out["mesh_stiffness_N_per_mm"] = ours
     out["paper_mesh_stiffness_N_per_mm"] = list(SEED_TABLES["stiffness"])
     out["mesh_stiffness_columns"] = [f"{'concave' if z else 'convex'} tooth meshing {kind}" for z, kind in STIFFNESS_COLUMNS]
-    out["mesh_stiffness_setting"] = "loaded contact at 100 N·m, accuracy 'default' (32 positions per pitch, 21 face slices)"
+    out["mesh_stiffness_setting"] = (f"loaded contact at 100 N·m, accuracy {accuracy!r} ({setting.positions_per_pitch} "
+                                     f"positions per pitch, {setting.face_slices} face slices)")
     out["tables_with_our_stiffness_paper_units"] = seed_tables(paper_units=True, stiffness=ours)
     out["tables_with_our_stiffness_newton"] = seed_tables(paper_units=False, stiffness=ours)
     if cross_check:
