@@ -176,6 +176,9 @@ def _optimize_keys() -> tuple[SceneKey, ...]:
         count("iterations", 1, "gradient: Adam iterations per start"),
         SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
                  (0.0, 1.0, False, True)),
+        SceneKey("smoothing", "", d["smoothing"], "gradient: σ₀ of the Gaussian smoothing of the objective, in "
+                 "the unit cube of the bounds, annealed to 0 (0: none)", (0.0, 0.5, True, True)),
+        count("smoothing_pairs", 1, "gradient: antithetic sample pairs per start and iteration when smoothing"),
         count("seed", 0, "random seed of the search and of the error samples"),
     ]
     scales = ("m_n",) * 5 + ("b",)

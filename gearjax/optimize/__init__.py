@@ -29,6 +29,12 @@ from .gradient import (
 from .gradient import (
     latin_hypercube as latin_hypercube,
 )
+from .gradient import (
+    sample_positions as sample_positions,
+)
+from .gradient import (
+    smoothed as smoothed,
+)
 from .objective import (
     Evaluation as Evaluation,
 )

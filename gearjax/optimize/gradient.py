@@ -15,8 +15,21 @@ A design whose evaluation fails (objective $+\infty$, non-finite gradient) is no
 stepped from: the start moves halfway back to its best point (towards the centre of the
 box if it has none yet).
 
+**Gaussian smoothing** (`GradientConfig.smoothing` $\sigma_0 > 0$). The step follows the
+gradient of the smoothed objective $J_\sigma(x) = \mathrm E_\varepsilon[J(x + \sigma\varepsilon)]$,
+$\varepsilon \sim N(0, I)$, estimated from the start's own point and `smoothing_pairs`
+antithetic pairs $x \pm \sigma\varepsilon_j$ (clipped to the box) as the mean of the
+objective's gradients there, $\nabla J_\sigma(x) = \mathrm E[\nabla J(x + \sigma\varepsilon)]$
+(Nesterov & Spokoiny 2017 for the smoothing). Every start of an iteration sees the same
+$\varepsilon_j$ (common random numbers), drawn afresh each iteration. $\sigma$ decays
+linearly from $\sigma_0$ to 0 over `iterations`, so the search first averages over the
+kinks and wiggles of $J$ within $\sigma$ and ends on $J$ itself. The best point and the
+step-length test use $J$ at the start's own point; the stall test is off (while $\sigma$ is
+large, $J$ there need not improve), so a start runs its `iterations` unless its step
+vanishes. Each iteration evaluates $1 + 2\,$`smoothing_pairs` designs per start.
+
 **Stopping.** A start stops when its best value has not improved by more than `ftol`
-(relative) for `patience` iterations, or when its projected step is shorter than `xtol`
+(relative) for `patience` iterations (not with smoothing), or when its projected step is shorter than `xtol`
 (unit coordinates); the run stops when every start has stopped (`converged`), or after
 `iterations`.
 """
@@ -33,7 +46,7 @@ from .._validate import check_int, check_range
 
 
 class GradientConfig(eqx.Module):
-    """Static settings of the multi-start projected Adam.
+    r"""Static settings of the multi-start projected Adam.
 
     Attributes:
         starts: number of starts run together (>= 1).
@@ -43,6 +56,10 @@ class GradientConfig(eqx.Module):
         ftol: relative improvement of a start's best value below which it counts as stalled.
         patience: stalled iterations after which a start stops (>= 1).
         xtol: projected step length (unit coordinates) below which a start stops.
+        smoothing: $\sigma_0$ of the Gaussian smoothing (unit coordinates, 0 to 0.5); 0
+            (default) follows the gradient of the objective itself.
+        smoothing_pairs: antithetic sample pairs per start and iteration when smoothing
+            (>= 1).
     """
 
     starts: int = eqx.field(static=True, default=8)
@@ -51,6 +68,8 @@ class GradientConfig(eqx.Module):
     ftol: float = eqx.field(static=True, default=1e-3)
     patience: int = eqx.field(static=True, default=12)
     xtol: float = eqx.field(static=True, default=1e-4)
+    smoothing: float = eqx.field(static=True, default=0.0)
+    smoothing_pairs: int = eqx.field(static=True, default=2)
 
     def __check_init__(self):
         check_int("starts", self.starts, 1)
@@ -59,6 +78,13 @@ class GradientConfig(eqx.Module):
         check_range("ftol", self.ftol, 0.0, 1.0)
         check_int("patience", self.patience, 1)
         check_range("xtol", self.xtol, 0.0, 1.0)
+        check_range("smoothing", self.smoothing, 0.0, 0.5)
+        check_int("smoothing_pairs", self.smoothing_pairs, 1)
+
+    @property
+    def samples(self) -> int:
+        """Designs evaluated per start and iteration: 1, or 1 + 2 `smoothing_pairs`."""
+        return 1 + 2 * self.smoothing_pairs if self.smoothing > 0.0 else 1
 
     def optimizer(self) -> optax.GradientTransformation:
         """Adam with the step size decaying from `learning_rate` to 1 % of it over
@@ -77,6 +103,7 @@ class GradientState(eqx.Module):
         best: best point of each start, and `best_value` its objective.
         stalled: iterations since each start last improved by more than `ftol`.
         active: the start has not stopped.
+        key: the run's random key (the smoothing's samples).
     """
 
     iteration: Int[Array, ""]
@@ -86,6 +113,7 @@ class GradientState(eqx.Module):
     best_value: Float[Array, " K"]
     stalled: Int[Array, " K"]
     active: Bool[Array, " K"]
+    key: Array
 
 
 def latin_hypercube(key: Array, count: int, dimension: int) -> Float[Array, "count dimension"]:
@@ -115,7 +143,35 @@ def gradient_init(key: Array, config: GradientConfig, dimension: int, initial: A
         jnp.full((k,), jnp.inf, position.dtype),
         jnp.zeros((k,), jnp.int32),
         jnp.ones((k,), bool),
+        key,
     )
+
+
+def sample_positions(state: GradientState, config: GradientConfig) -> Float[Array, "K M d"]:
+    r"""The designs to evaluate this iteration (unit coordinates), `config.samples` per start:
+    the start's point, then with smoothing its antithetic pairs $x \pm \sigma\varepsilon_j$
+    clipped to the box ($\sigma$ decaying linearly from `smoothing` to 0 over `iterations`;
+    the same $\varepsilon_j$ for every start)."""
+    position = state.position[:, None, :]
+    if config.samples == 1:
+        return position
+    fraction = 1.0 - state.iteration.astype(position.dtype) / config.iterations
+    sigma = config.smoothing * jnp.maximum(fraction, 0.0)
+    eps = jax.random.normal(jax.random.fold_in(state.key, state.iteration),
+                            (config.smoothing_pairs, position.shape[-1]), position.dtype)
+    offsets = jnp.concatenate([jnp.zeros_like(eps[:1]), sigma * eps, -sigma * eps])
+    return jnp.clip(position + offsets[None], 0.0, 1.0)
+
+
+def smoothed(values: Float[Array, "K M"], grads: Float[Array, "K M d"]) -> tuple[Float[Array, " K"], Float[Array, "K d"]]:
+    """Each start's objective at its own point (sample 0) and the mean gradient over its
+    samples whose value and gradient are finite (NaN where none is): the smoothed
+    objective's gradient estimate for `gradient_step`."""
+    ok = jnp.isfinite(values) & jnp.all(jnp.isfinite(grads), axis=-1)
+    count = jnp.sum(ok, axis=1)
+    total = jnp.sum(jnp.where(ok[..., None], grads, 0.0), axis=1)
+    grad = jnp.where(count[:, None] > 0, total / jnp.maximum(count, 1)[:, None].astype(total.dtype), jnp.nan)
+    return values[:, 0], grad
 
 
 def gradient_step(state: GradientState, value: Float[Array, " K"], grad: Float[Array, "K d"], config: GradientConfig) -> GradientState:
@@ -139,6 +195,9 @@ def gradient_step(state: GradientState, value: Float[Array, " K"], grad: Float[A
     retreat = 0.5 * (state.position + anchor)
     moved = jnp.where(ok[:, None], stepped, retreat)
     step = jnp.linalg.norm(moved - state.position, axis=-1)
-    active = state.active & (stalled < config.patience) & ~(ok & (step < config.xtol))
+    # With smoothing, J at the start's point need not improve while sigma is large: no
+    # stall test, the run follows its sigma schedule.
+    patient = (stalled < config.patience) | (config.smoothing > 0.0)
+    active = state.active & patient & ~(ok & (step < config.xtol))
     position = jnp.where(state.active[:, None], moved, state.position)
-    return GradientState(state.iteration + 1, position, opt_state, best, best_value, stalled, active)
+    return GradientState(state.iteration + 1, position, opt_state, best, best_value, stalled, active, state.key)

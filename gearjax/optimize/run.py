@@ -39,7 +39,7 @@ from ..io.progress import Progress, compiling
 from ..io.rundir import RunDirectory, atomic_write
 from .certification import CERTIFY_TOP, Certification, accuracy_name, candidates, certification_accuracy, certify
 from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
-from .gradient import GradientConfig, GradientState, gradient_init, gradient_step
+from .gradient import GradientConfig, GradientState, gradient_init, gradient_step, sample_positions, smoothed
 from .batch import batch_objective, batch_value_and_grad
 from .objective import Objective
 from .space import DesignSpace
@@ -98,7 +98,8 @@ class OptimizationResult:
 # The optimisers' own steps are small programs of their own (`batch` holds the objective's).
 _ga_ask = eqx.filter_jit(ga_ask)
 _ga_tell = eqx.filter_jit(ga_tell)
-_gradient_step = eqx.filter_jit(gradient_step)
+_gradient_step = eqx.filter_jit(lambda state, values, grads, config: gradient_step(state, *smoothed(values, grads), config))
+_sample_positions = eqx.filter_jit(sample_positions)
 
 
 def _ga_generation(objective: Objective, space: DesignSpace, config: GAConfig, state: GAState):
@@ -109,9 +110,11 @@ def _ga_generation(objective: Objective, space: DesignSpace, config: GAConfig, s
 
 
 def _gradient_iteration(objective: Objective, space: DesignSpace, config: GradientConfig, state: GradientState):
-    designs = space.to_design(state.position)
-    values, grads = batch_value_and_grad(objective, space, state.position)
-    return _gradient_step(state, values, grads, config), designs, values
+    points = _sample_positions(state, config)  # (starts, samples, 6)
+    unit = points.reshape(-1, points.shape[-1])
+    values, grads = batch_value_and_grad(objective, space, unit)
+    state = _gradient_step(state, values.reshape(points.shape[:2]), grads.reshape(points.shape), config)
+    return state, space.to_design(unit), values
 
 
 # ---------------------------------------------------------------------------- drivers
@@ -376,7 +379,8 @@ def gradient_descent(
     certify_top: int = CERTIFY_TOP,
 ) -> OptimizationResult:
     """Minimise the objective by projected Adam from `config.starts` Latin-hypercube starts
-    (`gearjax.optimize.gradient`), all starts in one compiled call per iteration.
+    (`gearjax.optimize.gradient`; with `config.smoothing`, on the Gaussian-smoothed
+    objective), all starts and their samples in one compiled call per iteration.
 
     Arguments as for `genetic`; `config.iterations` caps the iterations.
     """
@@ -386,4 +390,4 @@ def gradient_descent(
     state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
     step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
     return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step,
-                config.starts, certify, certify_top)
+                config.starts * config.samples, certify, certify_top)

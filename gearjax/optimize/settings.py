@@ -24,6 +24,8 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     starts = 8                    # gradient [8]
     iterations = 40               # gradient [40]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
+    smoothing = 0.1               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
+    smoothing_pairs = 2           # gradient: antithetic samples per start when smoothing [2]
     seed = 0                      # [0]
     root_relief_um = [5, 75]      # bounds, one key per parameter (the [modification]
     tip_relief_um = [5, 75]       #   keys), [lower, upper]; seed 001's by default:
@@ -51,8 +53,8 @@ from .space import PARAMETERS, SCENE_KEYS, DesignSpace
 _KEYS = {
     "method", "objective", "loads_Nm", "load_weights", "aggregate", "error_samples", "misalignment_um",
     "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
-    "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "seed", "certify",
-    "certify_top",
+    "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "smoothing",
+    "smoothing_pairs", "seed", "certify", "certify_top",
 } | {key for key, _ in SCENE_KEYS}
 
 
@@ -104,6 +106,8 @@ class OptimizeSettings:
     starts: int = 8
     iterations: int = 40
     learning_rate: float = 0.05
+    smoothing: float = 0.0
+    smoothing_pairs: int = 2
     seed: int = 0
     bounds: dict = dataclasses.field(default_factory=dict)  # parameter -> (lo, hi) in mm
 
@@ -139,11 +143,11 @@ class OptimizeSettings:
             choice = _choice("certify", table["certify"], ("fast", "default", "reference", "none"))
             out["certify"] = None if choice == "none" else choice
         for key, low in (("error_samples", 0), ("population", 2), ("generations", 1), ("starts", 1),
-                         ("iterations", 1), ("seed", 0), ("certify_top", 1)):
+                         ("iterations", 1), ("smoothing_pairs", 1), ("seed", 0), ("certify_top", 1)):
             if key in table:
                 out[key] = int(_number(key, table[key], low, integer=True))
         for key in ("misalignment_um", "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty",
-                    "max_lte_um", "lte_penalty", "learning_rate"):
+                    "max_lte_um", "lte_penalty", "learning_rate", "smoothing"):
             if key in table:
                 out[key] = float(_number(key, table[key], 0.0))
         bounds = {}
@@ -198,4 +202,5 @@ class OptimizeSettings:
         return GAConfig(population=self.population, elite=max(1, min(2, self.population - 1)))
 
     def gradient_config(self) -> GradientConfig:
-        return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate)
+        return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate,
+                              smoothing=self.smoothing, smoothing_pairs=self.smoothing_pairs)
