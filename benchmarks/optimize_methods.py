@@ -61,7 +61,7 @@ from _common import RESULTS, machine  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
-from gearjax.optimize.batch import batch_objective, batch_value_and_grad  # noqa: E402
+from gearjax.optimize.batch import batch_objective, batch_objective_in_chunks, batch_value_and_grad  # noqa: E402
 from gearjax.optimize.certification import certification_accuracy, with_accuracy  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
@@ -101,12 +101,7 @@ class Counter:
     def values(self, units) -> np.ndarray:
         """The objective at unit-cube points (n, 6), padded to CHUNK rows per program call."""
         units = np.clip(np.atleast_2d(np.asarray(units, float)), 0.0, 1.0)
-        out = []
-        for start in range(0, len(units), CHUNK):
-            part = units[start:start + CHUNK]
-            padded = np.concatenate([part, np.repeat(part[-1:], CHUNK - len(part), axis=0)])
-            out.append(np.asarray(batch_objective(self.objective, self.space.to_design(jnp.asarray(padded))))[: len(part)])
-        values = np.concatenate(out)
+        values = batch_objective_in_chunks(self.objective, self.space.to_design(jnp.asarray(units)), CHUNK)
         self._note(units, values, 1.0)
         return values
 
@@ -277,8 +272,7 @@ def evaluate_into(data: dict, store: dict, objective, space, todo: list, chunk: 
     failed), `chunk` designs per program call, the runs file saved after each call."""
     for start in range(0, len(todo), chunk):
         part = todo[start:start + chunk]
-        units = np.asarray([u for _, u in part] + [part[-1][1]] * (chunk - len(part)))
-        values = np.asarray(batch_objective(objective, space.to_design(jnp.asarray(units))))
+        values = batch_objective_in_chunks(objective, space.to_design(jnp.asarray([u for _, u in part])), chunk)
         for (key, _), value in zip(part, values):
             store[key] = float(value) if np.isfinite(value) else None
         save_runs(data)

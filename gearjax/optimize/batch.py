@@ -11,6 +11,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..runtime.cache import exclude_from_persistent_cache
 from .objective import Objective
@@ -21,6 +22,19 @@ def batch_objective(objective: Objective, designs):
     """$J$ of designs (mm), shape (P, 6)."""
     # A fixed dtype without weak typing, so every caller hits the same compiled program.
     return _objective_jit(objective, jnp.asarray(designs, objective.torques.dtype))
+
+
+def batch_objective_in_chunks(objective: Objective, designs, rows: int) -> np.ndarray:
+    """$J$ of designs (mm), shape (n, 6), as host values: `batch_objective` on `rows` designs
+    per call, the last call padded by repeating its last design, so that every n shares
+    the one program of `rows` designs."""
+    designs = np.atleast_2d(np.asarray(designs, dtype=float))
+    out = []
+    for start in range(0, designs.shape[0], rows):
+        part = designs[start:start + rows]
+        padded = np.concatenate([part, np.repeat(part[-1:], rows - part.shape[0], axis=0)])
+        out.append(np.asarray(batch_objective(objective, padded))[: part.shape[0]])
+    return np.concatenate(out) if out else np.zeros((0,))
 
 
 def batch_gradients(objective: Objective, designs):

@@ -101,7 +101,7 @@ def certify(objective: Objective, designs, values=None, *, accuracy="reference",
         accuracy: the certification accuracy.
         top: the batch is `top + 1` designs (padded), one program per objective structure.
     """
-    from .batch import batch_objective
+    from .batch import batch_objective_in_chunks
 
     check_int("certify_top", top, 1)
     target = certification_accuracy(accuracy)
@@ -110,11 +110,9 @@ def certify(objective: Objective, designs, values=None, *, accuracy="reference",
     designs = np.atleast_2d(np.asarray(designs, dtype=float))
     if designs.shape[-1] != 6 or not 1 <= designs.shape[0] <= top + 1:
         raise ValueError(f"designs must have shape (m, 6) with 1 <= m <= {top + 1}; got {designs.shape}")
-    m = designs.shape[0]
-    padded = np.concatenate([designs, np.repeat(designs[-1:], top + 1 - m, axis=0)])
 
     def evaluate(obj):
-        return np.asarray(batch_objective(obj, jnp.asarray(padded)))[:m]
+        return batch_objective_in_chunks(obj, designs, top + 1)
 
     values = evaluate(objective) if values is None else np.asarray(values, dtype=float)
     same = objective.scene.accuracy == target
