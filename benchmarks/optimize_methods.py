@@ -150,16 +150,18 @@ def run_gradient_restarts(counter: Counter, seed: int) -> None:
 def run_gradient_smoothed(counter: Counter, seed: int, smoothing: float = 0.1, pairs: int = 2) -> None:
     """Projected Adam on the Gaussian-smoothed objective, STARTS designs per call
     (STARTS // (1 + 2 pairs) starts), restarted from new starts until the budget is spent."""
-    starts = STARTS // (1 + 2 * pairs)
+    if STARTS % (1 + 2 * pairs):
+        raise ValueError(f"gradient_smoothed: 1 + 2 pairs must divide the {STARTS} designs per call; got pairs={pairs}")
+    starts, rows = STARTS // (1 + 2 * pairs), STARTS
     restart = 0
-    while counter.left >= STARTS * counter.gradient_cost:
-        iterations = max(1, int(counter.left // (STARTS * counter.gradient_cost)))
+    while counter.left >= rows * counter.gradient_cost:
+        iterations = max(1, int(counter.left // (rows * counter.gradient_cost)))
         config = go.GradientConfig(starts=starts, iterations=iterations, smoothing=smoothing, smoothing_pairs=pairs)
         sample = eqx.filter_jit(lambda s: go.sample_positions(s, config))
         step = eqx.filter_jit(lambda s, v, g: go.gradient_step(s, *go.smoothed(v, g), config))
         state = go.gradient_init(jax.random.PRNGKey(seed + 3000 * restart), config, 6)
         for _ in range(iterations):
-            if not bool(jnp.any(state.active)) or counter.left < STARTS * counter.gradient_cost:
+            if not bool(jnp.any(state.active)) or counter.left < rows * counter.gradient_cost:
                 break
             points = sample(state)
             values, grads = counter.value_and_grad(points.reshape(-1, 6))
@@ -399,6 +401,8 @@ def markdown(objectives: dict, best: dict) -> str:
     for name, methods in objectives.items():
         for method, entries in methods.items():
             finals = [e["certified_best_N"] for e in entries if e["certified_best_N"] is not None]
+            if not finals:  # runs not certified yet
+                continue
             hits = [e["evaluations_to_1pct"] for e in entries if e["evaluations_to_1pct"] is not None]
             used = [e["evaluations"] for e in entries]
             finer = [e.get("finer_N") for e in entries]

@@ -475,8 +475,12 @@ def test_smoothing_samples_a_starts_point_and_antithetic_pairs_common_to_every_s
     np.testing.assert_allclose(offsets[:, 1:3], -offsets[:, 3:5], atol=1e-15)  # antithetic
     np.testing.assert_array_equal(offsets[0], offsets[2])  # common random numbers
     assert 0.02 < np.std(offsets[0, 1:]) < 0.3  # sigma = 0.1 at the first iteration
-    later = np.asarray(go.sample_positions(eqx.tree_at(lambda s: s.iteration, state, jnp.asarray(10, jnp.int32)), cfg))
-    np.testing.assert_array_equal(later, 0.5)  # sigma has decayed to 0 at `iterations`
+    def at(iteration):
+        return np.asarray(go.sample_positions(eqx.tree_at(lambda s: s.iteration, state, jnp.asarray(iteration, jnp.int32)), cfg))
+
+    last = at(9) - 0.5  # the last iteration: sigma = sigma_0 / iterations, fresh samples
+    assert 0.002 < np.std(last[0, 1:]) < 0.03 and not np.allclose(last[0, 1:3], offsets[0, 1:3] / 10)
+    np.testing.assert_array_equal(at(10), 0.5)  # 0 at `iterations`
     corner = eqx.tree_at(lambda s: s.position, state, jnp.zeros((3, 6)))
     assert float(np.min(go.sample_positions(corner, cfg))) == 0.0  # clipped to the box
     assert float(np.max(go.sample_positions(corner, cfg))) > 0.0
@@ -494,9 +498,10 @@ def test_the_smoothed_gradient_is_the_mean_over_the_finite_samples():
 
 
 def test_smoothing_reaches_the_bowl_under_wiggles_where_plain_descent_stalls():
-    """A bowl with wiggles 12 per unit (depth 0.02 per parameter): projected Adam stops in a
-    wiggle's basin; on the smoothed objective (sigma 0.1, annealed) the same starts reach
-    the bowl's minimum."""
+    """A bowl with wiggles 12 per unit (depth 0.02 per parameter), 10 seeds of 4 starts:
+    projected Adam stops in a wiggle's basin nearly always; on the smoothed objective
+    (sigma 0.1, annealed) most starts reach the bowl's minimum (25 of 40 here, 1 of 40
+    without smoothing)."""
     import jax
 
     centre = jnp.array([0.3, 0.7, 0.45, 0.6, 0.35, 0.55])
@@ -504,17 +509,30 @@ def test_smoothing_reaches_the_bowl_under_wiggles_where_plain_descent_stalls():
     def f(x):
         return jnp.sum(jnp.square(x - centre), -1) + 0.01 * jnp.sum(1 - jnp.cos(24 * jnp.pi * (x - centre)), -1)
 
-    def run(cfg):
-        state = go.gradient_init(jax.random.PRNGKey(1), cfg, 6)
-        for _ in range(cfg.iterations):
-            points = go.sample_positions(state, cfg)
-            state = go.gradient_step(state, *go.smoothed(*jax.vmap(jax.vmap(jax.value_and_grad(f)))(points)), cfg)
-        return np.max(np.abs(np.asarray(state.best) - np.asarray(centre)), axis=1)
+    def reached(cfg):
+        value_and_grad = jax.vmap(jax.vmap(jax.value_and_grad(f)))
+        step = jax.jit(lambda s: go.gradient_step(s, *go.smoothed(*value_and_grad(go.sample_positions(s, cfg))), cfg))
+        count = 0
+        for seed in range(1, 11):
+            state = go.gradient_init(jax.random.PRNGKey(seed), cfg, 6)
+            for _ in range(cfg.iterations):
+                state = step(state)
+            count += int(np.sum(np.max(np.abs(np.asarray(state.best) - np.asarray(centre)), axis=1) < 0.01))
+        return count
 
-    plain = run(go.GradientConfig(starts=4, iterations=150, ftol=0.0, patience=200, xtol=1e-9))
-    smooth = run(go.GradientConfig(starts=4, iterations=150, xtol=1e-9, smoothing=0.1))
-    assert (plain > 0.05).all()  # every start ends in a wiggle
-    assert (smooth < 0.01).all()
+    plain = reached(go.GradientConfig(starts=4, iterations=150, ftol=0.0, patience=200, xtol=1e-9))
+    smooth = reached(go.GradientConfig(starts=4, iterations=150, xtol=1e-9, smoothing=0.1))
+    assert plain <= 4 and smooth >= 20, (plain, smooth)
+
+
+def test_resuming_a_run_of_another_version_names_the_setting_it_lacks(tmp_path):
+    from gearjax.io.rundir import RunDirectory, RunDirectoryError
+
+    RunDirectory(tmp_path, {"method": "gradient", "config": {"starts": 8}}, resume=False)
+    with pytest.raises(RunDirectoryError, match=r"differs in config\.smoothing \(absent from the saved run"):
+        RunDirectory(tmp_path, {"method": "gradient", "config": {"starts": 8, "smoothing": 0.0}}, resume=True)
+    with pytest.raises(RunDirectoryError, match=r"differs in config\.starts$"):
+        RunDirectory(tmp_path, {"method": "gradient", "config": {"starts": 4}}, resume=True)
 
 
 def test_a_start_that_never_had_a_finite_value_moves_to_the_centre():

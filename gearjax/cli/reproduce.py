@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
 
     if args.paper == "dca":
-        accuracy = args.accuracy or double_arc.STIFFNESS_ACCURACY
+        accuracy = double_arc.STIFFNESS_ACCURACY if args.accuracy is None else args.accuracy
         try:
             Accuracy.from_spec(accuracy)
         except ValueError as error:

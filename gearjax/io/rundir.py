@@ -18,6 +18,25 @@ class RunDirectoryError(ValueError):
     """The run directory holds another run, or one that cannot be resumed."""
 
 
+def _differences(saved: dict, now: dict, prefix: str = "") -> list[str]:
+    """The keys whose values differ, nested dicts followed (`config.smoothing`); a key
+    absent from the saved run (written by another version) says so."""
+    out = []
+    for key in sorted(set(saved) | set(now)):
+        a, b = saved.get(key, _ABSENT), now.get(key, _ABSENT)
+        if a == b:
+            continue
+        if isinstance(a, dict) and isinstance(b, dict):
+            out += _differences(a, b, f"{prefix}{key}.")
+        else:
+            out.append(f"{prefix}{key}" + (" (absent from the saved run: written by another version of gearjax)"
+                                           if a is _ABSENT else ""))
+    return out
+
+
+_ABSENT = object()
+
+
 class RunDirectory:
     """The files of one run (see the module docstring)."""
 
@@ -32,10 +51,9 @@ class RunDirectory:
                     f"run directory {self.path} already holds a run: pass resume=True (--resume) "
                     "to continue it, or choose another directory"
                 )
-            saved = json.loads(existing.read_text())
-            if saved != json.loads(json.dumps(description)):
-                diff = sorted(k for k in set(saved) | set(description) if saved.get(k) != json.loads(json.dumps(description)).get(k))
-                raise RunDirectoryError(f"cannot resume {self.path}: the run differs in {', '.join(diff)}")
+            saved, now = json.loads(existing.read_text()), json.loads(json.dumps(description))
+            if saved != now:
+                raise RunDirectoryError(f"cannot resume {self.path}: the run differs in {', '.join(_differences(saved, now))}")
         else:
             atomic_write(existing, json.dumps(description, indent=2).encode())
 

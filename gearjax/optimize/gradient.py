@@ -22,8 +22,9 @@ antithetic pairs $x \pm \sigma\varepsilon_j$ (clipped to the box) as the mean of
 objective's gradients there, $\nabla J_\sigma(x) = \mathrm E[\nabla J(x + \sigma\varepsilon)]$
 (Nesterov & Spokoiny 2017 for the smoothing). Every start of an iteration sees the same
 $\varepsilon_j$ (common random numbers), drawn afresh each iteration. $\sigma$ decays
-linearly from $\sigma_0$ to 0 over `iterations`, so the search first averages over the
-kinks and wiggles of $J$ within $\sigma$ and ends on $J$ itself. The best point and the
+linearly from $\sigma_0$ towards 0 over `iterations` ($\sigma_0/$`iterations` at the last),
+so the search first averages over the kinks and wiggles of $J$ within $\sigma$ and ends
+nearly on $J$ itself. The best point and the
 step-length test use $J$ at the start's own point; the stall test is off (while $\sigma$ is
 large, $J$ there need not improve), so a start runs its `iterations` unless its step
 vanishes. Each iteration evaluates $1 + 2\,$`smoothing_pairs` designs per start.
@@ -150,8 +151,8 @@ def gradient_init(key: Array, config: GradientConfig, dimension: int, initial: A
 def sample_positions(state: GradientState, config: GradientConfig) -> Float[Array, "K M d"]:
     r"""The designs to evaluate this iteration (unit coordinates), `config.samples` per start:
     the start's point, then with smoothing its antithetic pairs $x \pm \sigma\varepsilon_j$
-    clipped to the box ($\sigma$ decaying linearly from `smoothing` to 0 over `iterations`;
-    the same $\varepsilon_j$ for every start)."""
+    clipped to the box ($\sigma = \sigma_0(1 - i/$`iterations`$)$ at iteration $i$, so
+    $\sigma_0/$`iterations` at the last; the same $\varepsilon_j$ for every start)."""
     position = state.position[:, None, :]
     if config.samples == 1:
         return position

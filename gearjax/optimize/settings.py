@@ -24,7 +24,7 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     starts = 8                    # gradient [8]
     iterations = 40               # gradient [40]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
-    smoothing = 0.1               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
+    smoothing = 0.0               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
     smoothing_pairs = 2           # gradient: antithetic samples per start when smoothing [2]
     seed = 0                      # [0]
     root_relief_um = [5, 75]      # bounds, one key per parameter (the [modification]
