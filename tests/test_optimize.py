@@ -525,6 +525,34 @@ def test_smoothing_reaches_the_bowl_under_wiggles_where_plain_descent_stalls():
     assert plain <= 4 and smooth >= 20, (plain, smooth)
 
 
+def test_smoothed_descent_evaluates_every_sample_and_resumes_from_its_run_directory(objective, space, monkeypatch,
+                                                                                     tmp_path):
+    """`gradient_descent` with smoothing, its objective replaced by a bowl in the unit cube
+    (the run's plumbing, not the gear objective's program): each iteration evaluates the
+    starts' samples as one batch, the best only improves, and a finished run directory
+    resumed gives the same result (its state, the random key included, loaded)."""
+    import gearjax.optimize.run as run_module
+
+    batches = []
+
+    def bowl(objective, space, units):
+        units = jnp.asarray(units)
+        batches.append(units.shape)
+        return jnp.sum(jnp.square(units - 0.3), axis=-1), 2.0 * (units - 0.3)
+
+    monkeypatch.setattr(run_module, "batch_value_and_grad", bowl)
+    cfg = go.GradientConfig(starts=2, iterations=6, smoothing=0.1, smoothing_pairs=1)
+    first = go.gradient_descent(objective, space, config=cfg, seed=3, certify=None, run_dir=tmp_path / "run")
+    per_design = int(objective.torques.shape[0]) * objective.samples
+    assert set(batches) == {(6, 6)} and first.steps == 6
+    assert first.evaluations == first.gradient_evaluations == 6 * 6 * per_design
+    assert np.all(np.diff(first.history) <= 0.0) and first.best_objective < first.history[0]
+    again = go.gradient_descent(objective, space, config=cfg, seed=3, certify=None, run_dir=tmp_path / "run",
+                                resume=True)
+    np.testing.assert_array_equal(again.best_design, first.best_design)
+    assert again.history == first.history
+
+
 def test_resuming_a_run_of_another_version_names_the_setting_it_lacks(tmp_path):
     from gearjax.io.rundir import RunDirectory, RunDirectoryError
 
