@@ -360,10 +360,12 @@ def plot(objectives: dict, best: dict, path) -> None:
             for c in grid:
                 values = [min([v for cc, v in e["trajectory"] if cc <= c and v is not None] or [np.inf]) for e in entries]
                 medians.append(np.median(values))
-            ax.step(grid, medians, where="post", label=f"{method} ({len(entries)} seeds)")
+            yardstick = method in ("cma_es", "differential_evolution")
+            ax.step(grid, medians, where="post", ls="--" if yardstick else "-",
+                    label=f"{method}{' (yardstick)' if yardstick else ''}, {len(entries)} seeds")
         ax.axhline(1.01 * best[name], color="k", lw=0.6, ls=":", label="best certified + 1 %")
         ax.set(xscale="log", xlabel="objective evaluations", ylabel="median certified running best F_s (N)",
-               title=name)
+               title=f"{name}: {', '.join(f'{t:g}' for t in OBJECTIVES[name])} N·m, certified at reference")
         ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
