@@ -28,8 +28,8 @@ def peak_correction(residual, y, z, lead_correction, half_width, limits) -> Arra
     function theorem on the explicit residual (no second trace of the Newton solver):
     $y' = -J^{-1}F_z$, $y'' = -J^{-1}\\,\\mathrm{d}^2F(y + t y', z + t)/\\mathrm{d}t^2$.
     """
-    jac = jax.jacfwd(residual, 0)(y, z)
-    _, f_z = jax.jvp(lambda zz: residual(y, zz), (z,), (jnp.ones_like(z),))
+    # J and F_z from one forward pass over (y, z): the residual is traced once for both.
+    jac, f_z = jax.jacfwd(residual, (0, 1))(y, z)
     # A dense 3x3 solve: differentiable to any order and free of lineax's error checks
     # (host callbacks, which would keep the program out of the compilation cache).
     dy = -jnp.linalg.solve(jac, f_z)
