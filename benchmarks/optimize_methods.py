@@ -126,16 +126,34 @@ def run_ga(counter: Counter, seed: int, population: int = 40, fraction: float = 
     return state
 
 
-def run_gradient(counter: Counter, seed: int, initial=None, learning_rate: float = 0.05) -> None:
-    iterations = max(1, int(counter.left // (STARTS * counter.gradient_cost)))
-    config = go.GradientConfig(starts=STARTS, iterations=iterations, learning_rate=learning_rate)
-    step = eqx.filter_jit(lambda s, v, g: go.gradient_step(s, v, g, config))
+#: one projected Adam step on the (smoothed) objective; the samples to evaluate
+_step = eqx.filter_jit(lambda state, values, grads, config: go.gradient_step(state, *go.smoothed(values, grads), config))
+_sample = eqx.filter_jit(go.sample_positions)
+
+
+def descend(counter: Counter, seed: int, config: go.GradientConfig, initial=None) -> None:
+    """gearjax's projected Adam (`gradient_init`, `sample_positions`, `smoothed`,
+    `gradient_step`, as `gearjax optimize` runs it): every sample of every start in one
+    value-and-gradient call per iteration, until every start has stopped, the iterations
+    are done or the budget cannot pay another call."""
+    rows = config.starts * config.samples
     state = go.gradient_init(jax.random.PRNGKey(seed), config, 6, initial)
-    for _ in range(iterations):
-        if not bool(jnp.any(state.active)) or counter.left < STARTS * counter.gradient_cost:
+    for _ in range(config.iterations):
+        if not bool(jnp.any(state.active)) or counter.left < rows * counter.gradient_cost:
             break
-        values, grads = counter.value_and_grad(state.position)
-        state = step(state, jnp.asarray(values), grads)
+        points = _sample(state, config)
+        values, grads = counter.value_and_grad(points.reshape(-1, 6))
+        state = _step(state, jnp.asarray(values).reshape(points.shape[:2]), grads.reshape(points.shape), config)
+
+
+def iterations_left(counter: Counter, rows: int) -> int:
+    """Iterations of `rows` value-and-gradient rows that the budget left pays for (≥ 1)."""
+    return max(1, int(counter.left // (rows * counter.gradient_cost)))
+
+
+def run_gradient(counter: Counter, seed: int, initial=None, learning_rate: float = 0.05) -> None:
+    config = go.GradientConfig(starts=STARTS, iterations=iterations_left(counter, STARTS), learning_rate=learning_rate)
+    descend(counter, seed, config, initial)
 
 
 def run_gradient_restarts(counter: Counter, seed: int) -> None:
@@ -152,20 +170,11 @@ def run_gradient_smoothed(counter: Counter, seed: int, smoothing: float = 0.1, p
     (STARTS // (1 + 2 pairs) starts), restarted from new starts until the budget is spent."""
     if STARTS % (1 + 2 * pairs):
         raise ValueError(f"gradient_smoothed: 1 + 2 pairs must divide the {STARTS} designs per call; got pairs={pairs}")
-    starts, rows = STARTS // (1 + 2 * pairs), STARTS
     restart = 0
-    while counter.left >= rows * counter.gradient_cost:
-        iterations = max(1, int(counter.left // (rows * counter.gradient_cost)))
-        config = go.GradientConfig(starts=starts, iterations=iterations, smoothing=smoothing, smoothing_pairs=pairs)
-        sample = eqx.filter_jit(lambda s: go.sample_positions(s, config))
-        step = eqx.filter_jit(lambda s, v, g: go.gradient_step(s, *go.smoothed(v, g), config))
-        state = go.gradient_init(jax.random.PRNGKey(seed + 3000 * restart), config, 6)
-        for _ in range(iterations):
-            if not bool(jnp.any(state.active)) or counter.left < rows * counter.gradient_cost:
-                break
-            points = sample(state)
-            values, grads = counter.value_and_grad(points.reshape(-1, 6))
-            state = step(state, jnp.asarray(values).reshape(points.shape[:2]), grads.reshape(points.shape))
+    while counter.left >= STARTS * counter.gradient_cost:
+        config = go.GradientConfig(starts=STARTS // (1 + 2 * pairs), iterations=iterations_left(counter, STARTS),
+                                   smoothing=smoothing, smoothing_pairs=pairs)
+        descend(counter, seed + 3000 * restart, config)
         restart += 1
 
 
