@@ -18,6 +18,10 @@ class RunDirectoryError(ValueError):
     """The run directory holds another run, or one that cannot be resumed."""
 
 
+#: marks a key that one of two descriptions lacks (`_differences`)
+_ABSENT = object()
+
+
 def _differences(saved: dict, now: dict, prefix: str = "") -> list[str]:
     """The keys whose values differ, nested dicts followed (`config.smoothing`); a key
     absent from the saved run (written by another version) says so."""
@@ -32,9 +36,6 @@ def _differences(saved: dict, now: dict, prefix: str = "") -> list[str]:
             out.append(f"{prefix}{key}" + (" (absent from the saved run: written by another version of gearjax)"
                                            if a is _ABSENT else ""))
     return out
-
-
-_ABSENT = object()
 
 
 class RunDirectory:
