@@ -401,8 +401,8 @@ def test_cli_optimize_writes_json_history_and_a_runnable_best_scene(tmp_path, ca
     from gearjax.cli import main
     from gearjax.io.scene_file import load_scene
 
-    path = _scene_file(tmp_path, f"population = {POPULATION}\ngenerations = 2\ntip_relief_length = [0.5, 4.5]\n"
-                                 'certify = "fast"\n')
+    path = _scene_file(tmp_path, f"method = 'ga'\npopulation = {POPULATION}\ngenerations = 2\n"
+                                 'tip_relief_length = [0.5, 4.5]\ncertify = "fast"\n')
     out = tmp_path / "run"
     code = main(["optimize", path, "--out", str(out), "--json", "--quiet", "--no-cache"])
     captured = capsys.readouterr()

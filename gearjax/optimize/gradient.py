@@ -50,8 +50,10 @@ class GradientConfig(eqx.Module):
     r"""Static settings of the multi-start projected Adam.
 
     Attributes:
-        starts: number of starts run together (>= 1).
-        iterations: cap on the iterations (>= 1).
+        starts: number of starts run together (>= 1; default 10).
+        iterations: cap on the iterations (>= 1; default 100: with 10 starts about the
+            GA's default budget of 40 x 30 evaluations, a value and gradient costing
+            1.2-1.3 forward evaluations).
         learning_rate: Adam's initial step size in unit-cube coordinates (> 0), decaying
             to 1 % of it over `iterations` (cosine schedule).
         ftol: relative improvement of a start's best value below which it counts as stalled.
@@ -63,8 +65,8 @@ class GradientConfig(eqx.Module):
             (>= 1).
     """
 
-    starts: int = eqx.field(static=True, default=8)
-    iterations: int = eqx.field(static=True, default=40)
+    starts: int = eqx.field(static=True, default=10)
+    iterations: int = eqx.field(static=True, default=100)
     learning_rate: float = eqx.field(static=True, default=0.05)
     ftol: float = eqx.field(static=True, default=1e-3)
     patience: int = eqx.field(static=True, default=12)

@@ -3,7 +3,7 @@
 Every key is optional (defaults in brackets); units are those of the scene file:
 
     [optimize]
-    method = "ga"                 # "ga" | "gradient" ["ga"]
+    method = "gradient"           # "gradient" | "ga" ["gradient"]
     objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) ["force"]
     loads_Nm = [400, 1000, 1600]  # load spectrum [the scene's torque]
     load_weights = [1, 2, 1]      # one per load, sum > 0 [equal]
@@ -21,8 +21,8 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     certify_top = 5               # candidates certified besides the best found [5]
     population = 40               # GA [40]
     generations = 30              # GA [30]
-    starts = 8                    # gradient [8]
-    iterations = 40               # gradient [40]
+    starts = 10                   # gradient [10]
+    iterations = 100              # gradient [100]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
     smoothing = 0.0               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
     smoothing_pairs = 2           # gradient: antithetic samples per start when smoothing [2]
@@ -86,7 +86,7 @@ def _choice(key: str, value: Any, choices: tuple) -> str:
 class OptimizeSettings:
     """The parsed `[optimize]` section (scene-file units)."""
 
-    method: str = "ga"
+    method: str = "gradient"
     objective: str = "force"
     loads_Nm: tuple[float, ...] | None = None
     load_weights: tuple[float, ...] | None = None
@@ -103,8 +103,8 @@ class OptimizeSettings:
     certify_top: int = 5
     population: int = 40
     generations: int = 30
-    starts: int = 8
-    iterations: int = 40
+    starts: int = 10
+    iterations: int = 100
     learning_rate: float = 0.05
     smoothing: float = 0.0
     smoothing_pairs: int = 2
