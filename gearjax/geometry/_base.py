@@ -380,11 +380,11 @@ def generic_transverse_normal_fraction(pair: AbstractFlankPair, gear: int, u: Ar
 def generic_slice_point(pair: AbstractFlankPair, gear: int, u: ArrayLike, z: ArrayLike, slice_rotation: ArrayLike,
                         depth: ArrayLike = 0.0) -> Float[Array, "2"]:
     """`AbstractFlankPair.slice_point` from the local profile, its normal and
-    `transverse_normal_fraction`."""
+    `transverse_normal_fraction`; a `depth` of Python 0 traces the profile point alone (the
+    normal and the fraction each trace the profile's derivative)."""
     local = pair.local_profile(gear, u)
-    normal = pair.profile_normal(gear, u)
-    offset = depth / pair.transverse_normal_fraction(gear, u, z)
-    local = local - offset * normal
+    if not (isinstance(depth, (int, float)) and depth == 0):
+        local = local - depth / pair.transverse_normal_fraction(gear, u, z) * pair.profile_normal(gear, u)
     sense = 1.0 if gear == 0 else -1.0
     return pair.center(gear) + rotate2(sense * slice_rotation, local)
 
@@ -394,5 +394,5 @@ def generic_slice_point_tangent(pair: AbstractFlankPair, gear: int, u: ArrayLike
     """`AbstractFlankPair.slice_point_tangent` by forward-mode differentiation of
     `slice_point`."""
     u = as_float(u)
-    depth = (lambda t: jnp.zeros_like(t)) if depth is None else depth
+    depth = (lambda t: 0.0) if depth is None else depth
     return jax.jvp(lambda t: pair.slice_point(gear, t, z, slice_rotation, depth(t)), (u,), (jnp.ones_like(u),))

@@ -44,6 +44,11 @@ class FlankDepth(eqx.Module):
                 depth = depth + self.errors.depth(pair_index, z, pair.face_width)
         return depth
 
+    def applies_to(self, gear: int) -> bool:
+        """False when nothing is applied to `gear`'s flank (static): its depth is zero and
+        need not be traced."""
+        return (self.pinion if gear == 0 else self.gear) is not None or (gear == 0 and self.errors is not None)
+
     @property
     def is_zero(self) -> bool:
         """True when nothing is applied (static)."""

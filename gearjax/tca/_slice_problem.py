@@ -57,17 +57,24 @@ class SliceProblem(eqx.Module):
     pinion_rotation: Scalar  # Phi_1, lead rotation included (rad)
 
     def _depth(self, gear):
-        """The depth (mm) of `gear`'s flank in this slice as a function of $u$."""
+        """The depth (mm) of `gear`'s flank in this slice as a function of $u$; None where
+        nothing is applied to it (then nothing is traced)."""
+        if not self.depth.applies_to(gear):
+            return None
         return lambda u: self.depth(self.pair, gear, self.pair_index, u, self.z)
+
+    def _depth_at(self, gear, u):
+        depth = self._depth(gear)
+        return 0.0 if depth is None else depth(u)
 
     def _gear_rotation(self, offset):
         return self.pinion_rotation / self.pair.gear_ratio + offset
 
     def pinion_point(self, u1):
-        return self.pair.slice_point(0, u1, self.z, self.pinion_rotation, self._depth(0)(u1))
+        return self.pair.slice_point(0, u1, self.z, self.pinion_rotation, self._depth_at(0, u1))
 
     def gear_point(self, u2, offset):
-        return self.pair.slice_point(1, u2, self.z, self._gear_rotation(offset), self._depth(1)(u2))
+        return self.pair.slice_point(1, u2, self.z, self._gear_rotation(offset), self._depth_at(1, u2))
 
     def pinion_tangent(self, u1):
         """Point and $\\mathrm{d}X_1/\\mathrm{d}u_1$ (`AbstractFlankPair.slice_point_tangent`)."""
