@@ -51,6 +51,16 @@ class RESULTS(eqx.Enumeration):
         "Widen the tooth-pair window (Scene(pairs=...)), cover more of the mesh "
         "(Scene(pitches=...)) or refine the grid (Accuracy.positions_per_pitch)."
     )
+    first_contact_jump = (
+        "The incoming pair's gap jumps from open to closed at one pinion angle instead of "
+        "closing, so there is no quasi-static first contact: e.g. the loaded TE of the pairs "
+        "in mesh drops there below the incoming pair's offset (a pair's contact leaves its "
+        "flank), and the gear swings through the step until the incoming pair stops it, a "
+        "dynamic strike that gearjax does not model. result.impact.pinion_angle locates the "
+        "jump. Seen with pitch errors (a double-circular-arc pair's axial pitch error); a "
+        "jump from a missed TCA candidate shows in result.tca.unconverged, one from the grid "
+        "moves on a finer Accuracy."
+    )
     first_contact_unconverged = (
         "The first-contact root search (safeguarded Newton on the gap along the pinion "
         "angle) did not converge. Raise Accuracy.impact_max_steps."

@@ -165,3 +165,25 @@ def test_derived_quantities_are_differentiable(seed_pair):
     h = 1e-6
     fd = (eps(0.2 + h) - eps(0.2 - h)) / (2 * h)
     assert float(g) == pytest.approx(float(fd), rel=1e-6)
+
+
+def test_a_flank_without_depth_gives_the_same_point_and_tangent():
+    """`generic_slice_point` with a depth of Python 0 traces the profile point alone; it
+    equals the full computation with a zero array as the depth bit for bit (the normal
+    offset is 0 × a finite normal), and so does `generic_slice_point_tangent` without a
+    depth function against one returning zeros."""
+    from gearjax.geometry._base import generic_slice_point, generic_slice_point_tangent
+
+    from gearjax import DoubleArcGearPair
+
+    pair = DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0, 0.0).resolve()
+    for zone in pair.contact_zones():
+        for gear in (0, 1):
+            lo, hi = (float(v) for v in zone.profile_limits(gear))
+            for u in (lo, 0.5 * (lo + hi), hi):
+                np.testing.assert_array_equal(generic_slice_point(zone, gear, u, 7.0, 0.3, 0.0),
+                                              generic_slice_point(zone, gear, u, 7.0, 0.3, jnp.zeros(())))
+                bare = generic_slice_point_tangent(zone, gear, u, 7.0, 0.3, None)
+                zeros = generic_slice_point_tangent(zone, gear, u, 7.0, 0.3, lambda t: jnp.zeros_like(t))
+                for a, b in zip(bare, zeros):
+                    np.testing.assert_array_equal(a, b)

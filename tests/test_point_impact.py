@@ -14,6 +14,7 @@ import gearjax as gj
 from gearjax._solution import RESULTS
 from gearjax.impact.search import SearchContext, evaluate
 from gearjax.io.report import summary
+from gearjax.pipeline import check_codes
 from gearjax.papers.double_arc import SEED_CASE, seed_scene_file
 
 from _cases import run_scene_file
@@ -68,24 +69,52 @@ def test_each_zones_force_is_the_energy_balance_of_the_points_own_law(struck):
     np.testing.assert_allclose(np.asarray(imp.velocity), np.asarray(imp.gap_closing_velocity), rtol=1e-6)
 
 
+@eqx.filter_jit
+def _gap(ctx, column, phi1):
+    """H at one pinion angle (rad): one program for every scene of the seed pair and column."""
+    (te, lte, _, _), _ = evaluate(ctx, column, phi1)
+    return te - lte
+
+
+def _gaps(scene, imp):
+    """Per zone, H of the zone's incoming pair as a function of the pinion angle."""
+    ctx = SearchContext(scene.pair.resolve(), scene.depth, jnp.asarray(scene.operating.torque), scene.contact_model,
+                        scene.pairs)
+    columns = [z * len(scene.pairs) + scene.pairs.index(int(imp.pair_index[z])) for z in range(2)]
+    return [lambda phi1, c=c: float(_gap(ctx, jnp.asarray(c), phi1)) for c in columns]
+
+
 def test_each_zones_first_contact_is_the_root_of_its_gap(struck):
     """At the first contact the zone's incoming pair's located peak meets the loaded TE of the
     others (H = 0 to the search's tolerance), and a little earlier it is clear (H < 0)."""
     scene, result, _ = struck
     imp = result.impact
-    pair = scene.pair.resolve()
-    ctx = SearchContext(pair, scene.depth, jnp.asarray(scene.operating.torque), scene.contact_model, scene.pairs)
-    columns = [z * len(scene.pairs) + scene.pairs.index(int(imp.pair_index[z])) for z in range(2)]
-
-    @eqx.filter_jit
-    def gap(column, phi1):
-        (te, lte, _, _), _ = evaluate(ctx, column, phi1)
-        return te - lte
-
-    for z, column in enumerate(columns):
+    for z, gap in enumerate(_gaps(scene, imp)):
         root = imp.pinion_angle[z]
-        assert abs(float(gap(column, root))) < 1e-9  # rad
-        assert float(gap(column, root - 2e-4)) < 0.0
+        assert abs(gap(root)) < 1e-9  # rad
+        assert gap(root - 2e-4) < 0.0
+
+
+def test_a_gap_that_jumps_across_zero_is_reported_as_a_jump(struck):
+    """At Δ_α = +0.373 mm (a pitch-circle error of 0.1 mm) the rigid TE tilts by about
+    2 000 µrad per pitch and drops by about 690 µrad at the convex tooth's hand-over
+    (notebook 02): that zone's gap H jumps across zero, with no root. The search
+    stops there, well within `impact_max_steps`, with `first_contact_jump`; H on either side
+    of the located angle is far from zero, of opposite signs."""
+    scene, _, _ = struck
+    # the fixture's program: Δ_α is a leaf (kept strongly typed)
+    tilted = eqx.tree_at(lambda s: s.pair.axial_pitch_error, scene, scene.pair.axial_pitch_error + 0.3732)
+    imp = gj.simulate(tilted, throw=False).impact
+    jumped = np.asarray(imp.result == RESULTS.first_contact_jump)
+    assert jumped[0]
+    steps = np.asarray(imp.search_steps)
+    assert (steps[jumped] < scene.accuracy.impact_max_steps).all()
+    for z, gap in enumerate(_gaps(tilted, imp)):
+        if jumped[z]:
+            root = imp.pinion_angle[z]
+            assert gap(root - 1e-8) < -1e-6 and gap(root + 1e-8) > 1e-6  # rad
+    with pytest.raises(gj.SimulationError, match="first_contact_jump"):
+        check_codes({"impact": imp.result})
 
 
 def test_notebook_02_runs(struck):

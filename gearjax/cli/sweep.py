@@ -159,7 +159,7 @@ def summary(r: dict) -> str:
         lines.append(f"  {t:>26g}  {cells}   {r['lte_peak_to_peak_um'][i]:.3f}")
     failed = int(np.size(r["impact_converged"]) - np.sum(r["impact_converged"]))
     if failed:
-        lines.append(f"  {failed} grid points did not converge (impact_result in the JSON)")
+        lines.append(f"  {failed} grid points failed (impact_result in the JSON)")
     if r["files"]:
         lines.append("  wrote " + ", ".join(r["files"]))
     return "\n".join(lines)

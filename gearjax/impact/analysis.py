@@ -65,10 +65,12 @@ class ImpactResult(eqx.Module):
     Attributes:
         result: `RESULTS.successful`, or the first failure of the search:
             `first_contact_not_bracketed` (no first contact on the cycle grid),
-            `first_contact_unconverged` (the root search), `impact_contact_unconverged`
+            `first_contact_jump` (the gap jumps across zero: no quasi-static first
+            contact), `first_contact_unconverged` (the root search), `impact_contact_unconverged`
             (the loaded contact at the first-contact position) or `stiffness_fit_failed`
             (a solve of the local force-approach curve). The other fields are meaningful
-            only where it is successful.
+            only where it is successful (for `first_contact_jump`, `pinion_angle` locates
+            the jump).
         pair_index: the incoming tooth pair $k$ of the window.
         pinion_angle: $\\varphi_1^*$ at first contact (rad, cycle frame of pair $k$).
         slice_z: axial position of M (mm).
@@ -213,8 +215,7 @@ def _impact_at(ctx: SearchContext, column, search: _Search, speed, inertia, foun
     contact = search.contact
     te, lte, tca, dte, dlte = contact.te, contact.lte, contact.tca, contact.te_slope, contact.lte_slope
     peak = contact.peak
-    x1 = peak.pinion_point
-    n = peak.normal
+    x1, n = peak.pinion_point, peak.normal
     kind = contact_kind(peak.contact.kind)
     center2 = pair.center(1)
     p_arm, q_arm = moment_arms(x1, n, center2)
@@ -235,6 +236,7 @@ def _impact_at(ctx: SearchContext, column, search: _Search, speed, inertia, foun
     v = jnp.maximum(velocity, 0.0)
     result = first_failure(
         (~found, RESULTS.first_contact_not_bracketed),
+        (search.jumped, RESULTS.first_contact_jump),
         (~search.converged, RESULTS.first_contact_unconverged),
         (~solved, RESULTS.impact_contact_unconverged),
         (fit.result != RESULTS.successful, fit.result),

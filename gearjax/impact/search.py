@@ -34,7 +34,15 @@ else the bracket's midpoint (bisection), so the search never leaves the bracket 
 steps at least halve. It has converged when $|H| \le$ atol and the Newton step or the
 bracket is below atol + rtol $|\varphi_1|$ (`Accuracy.newton_atol`, `newton_rtol`);
 `Accuracy.impact_max_steps` caps the evaluations, `ImpactResult.search_steps` counts
-them. The values at the last evaluated point, rates included, are the first contact's:
+them. Where the bracket, both ends evaluated, shrinks below that tolerance while $H$
+rises across it by more than atol and by far more than its end slopes allow, $H$
+**jumps** across zero and has no root: e.g. the loaded TE of the pairs in mesh drops
+below the incoming pair's offset in one step (a pair's contact leaves its flank), so the
+gear swings through the step, freely or on the remaining pairs, until the incoming pair
+stops it. That dynamic strike is not the quasi-static mesh-in this module models: the
+search stops and the impact's result is `first_contact_jump`. A jump is found by
+bisection, so it takes about as many evaluations as the bracket has bits above the
+tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged. The values at the last evaluated point, rates included, are the first contact's:
 the search is the only place the single-position TCA/LTCA is traced in a program that
 is not differentiated. The loop is a `lax.while_loop` with a result code, no callbacks.
 
@@ -54,7 +62,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._custom_types import Array, Bool, Int, Scalar
+from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide
 from ..ltca.analysis import LTCAResult, loaded_contact_analysis
 from ..ltca.model import ContactModel
@@ -167,6 +175,7 @@ class _Search(eqx.Module):
     solved: Bool[Array, ""]
     steps: Int[Array, ""]
     converged: Bool[Array, ""]
+    jumped: Bool[Array, ""]
 
 
 class _SearchState(eqx.Module):
@@ -178,6 +187,7 @@ class _SearchState(eqx.Module):
     point: Scalar  # where the next evaluation goes
     probe: Int[Array, ""]  # the point is the lower end to check (-1), the upper one (+1), or neither (0)
     last_step: Scalar  # length of the previous step (the safeguard's reference)
+    ends: Float[Array, "2 2"]  # H and H' at (lower, upper) where evaluated
     search: _Search
 
 
@@ -186,6 +196,16 @@ def _tolerances(ctx: SearchContext, dtype):
     near machine precision) and the smallest slope $H'$ trusted for a Newton step."""
     rtol, atol = ctx.model.accuracy.newton_tolerances(dtype)
     return atol, rtol, 1e3 * float(jnp.finfo(dtype).eps)
+
+
+def _jump(ends, below, h, dh, lower, upper, atol):
+    """The bracket ends' `(H, H')` with the point just evaluated (`below`: it is the lower
+    end), and whether $H$ jumps across zero inside the bracket: from end to end it rises by
+    more than atol and by more than $10^3$ times what the steeper end's slope allows over
+    the bracket's width (a continuous $H$ rises by about that slope times the width)."""
+    ends = jnp.where(below, ends.at[0].set(jnp.stack([h, dh])), ends.at[1].set(jnp.stack([h, dh])))
+    rise = ends[1, 0] - ends[0, 0]
+    return ends, (rise > atol) & (rise > 1e3 * jnp.max(jnp.abs(ends[:, 1])) * (upper - lower))
 
 
 def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, found) -> _Search:
@@ -226,14 +246,14 @@ def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, foun
     )
     zero = jnp.zeros((), jnp.int32)
     initial = _SearchState(
-        lower, upper, jnp.zeros(2, bool), start, zero, width,
-        _Search(start, contact, j, solved, zero, jnp.zeros((), bool)),
+        lower, upper, jnp.zeros(2, bool), start, zero, width, jnp.zeros((2, 2), lower.dtype),
+        _Search(start, contact, j, solved, zero, jnp.zeros((), bool), jnp.zeros((), bool)),
     )
     max_steps = ctx.model.accuracy.impact_max_steps
 
     def cond(state: _SearchState):
         s = state.search
-        return (s.steps == 0) | (found & ~s.converged & (s.steps < max_steps))
+        return (s.steps == 0) | (found & ~s.converged & ~s.jumped & (s.steps < max_steps))
 
     def body(state: _SearchState):
         x = state.point
@@ -264,8 +284,10 @@ def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, foun
         check_upper = ~checked[1] & ~check_lower & (out_up | (increasing & (candidate >= upper)) | (shrunk & below))
         point = jnp.where(check_lower, lower, jnp.where(check_upper, upper, point))
         probe = jnp.where(check_lower, -1, jnp.where(check_upper, 1, 0)).astype(jnp.int32)
-        search = _Search(x, contact, j, solved, state.search.steps + 1, converged)
-        return _SearchState(lower, upper, checked, point, probe, jnp.abs(point - x), search)
+        ends, rises = _jump(state.ends, below, h, dh, lower, upper, atol)
+        jumped = shrunk & checked[0] & checked[1] & ~converged & rises
+        search = _Search(x, contact, j, solved, state.search.steps + 1, converged, jumped)
+        return _SearchState(lower, upper, checked, point, probe, jnp.abs(point - x), ends, search)
 
     return jax.lax.while_loop(cond, body, initial).search
 
@@ -316,7 +338,7 @@ def _first_contact_jvp(primals, tangents):
     d_contact = jax.tree_util.tree_map(
         lambda t, x: t if eqx.is_inexact_array(x) else None, d_contact, search.contact
     )
-    d_search = _Search(d_root, d_contact, None, None, None, None)
+    d_search = _Search(d_root, d_contact, None, None, None, None, None)
     return search, d_search
 
 
