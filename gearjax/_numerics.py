@@ -109,3 +109,15 @@ def smooth_max(x: ArrayLike, axis: int, sharpness: float | None) -> jax.Array:
     if sharpness is None:
         return jnp.max(x, axis=axis)
     return jax.nn.logsumexp(sharpness * x, axis=axis) / sharpness
+
+
+def second_order_root(root: ArrayLike, step) -> jax.Array:
+    r"""A root $x^*$ of $f(x, p) = 0$ found without derivatives (`root` under
+    `stop_gradient`), carrying the implicit function's first and second derivatives in $p$:
+    `step(x)` is one Newton step $N(x) = x - f/f_x$ on the traced $p$. One step from the
+    root gives $x'$ exactly ($N_x = 0$ there) but misses the $f_{xx}x'^2$ term of $x''$;
+    two steps give $x''$ as well. The value is the first step's, bit for bit ($a + (b - a)
+    = b$ for $a, b$ within a factor of two)."""
+    once = step(root)
+    twice = step(once)
+    return twice + jax.lax.stop_gradient(once - twice)

@@ -109,3 +109,24 @@ def test_batched_positions_and_the_derivatives_match_finite_differences():
         minus[argnum] -= step
         fd = (f(*plus) - f(*minus)) / (2 * step)
         np.testing.assert_allclose(jax.grad(f, argnums=argnum)(*args), fd, rtol=1e-5)
+
+
+def test_the_second_derivatives_are_the_implicit_functions():
+    """The shared lag's second derivatives (the impact differentiates its rates along the
+    pinion angle once more) against central differences of its first: in the torque, and
+    across the torque and a gap. With one Newton step from the root instead of two
+    (`second_order_root`) they miss the $f_{\\Theta\\Theta}\\Theta'^2$ term."""
+    arms, linear, hertz = jnp.full(2, 45.0), jnp.full(2, 2e-5), jnp.full(2, 3e-4)
+
+    def f(torque, gap1):
+        return shared_rotation(torque, jnp.stack([jnp.zeros_like(gap1), gap1]), arms, linear, hertz)
+
+    torque, gap = 40000.0, 0.001
+    d_torque = jax.grad(f, argnums=0)
+    second = jax.jacfwd(d_torque, argnums=(0, 1))(torque, gap)
+    for argnum, step in ((0, 1e-1), (1, 1e-7)):
+        plus, minus = [torque, gap], [torque, gap]
+        plus[argnum] += step
+        minus[argnum] -= step
+        fd = (d_torque(*plus) - d_torque(*minus)) / (2 * step)
+        np.testing.assert_allclose(second[argnum], fd, rtol=1e-5)

@@ -31,6 +31,7 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float
+from .._numerics import second_order_root
 
 #: Iterations of the arithmetic–geometric mean (quadratic convergence: 7 reach double
 #: precision for $b/a \ge 10^{-6}$).
@@ -85,8 +86,7 @@ def ellipse_ratio(curvature_ratio: ArrayLike) -> Array:
     log_kappa = -jnp.log(1.0339) - 0.636 * jnp.log(fixed)
     for _ in range(NEWTON_STEPS):
         log_kappa = _newton_step(log_kappa, fixed)
-    # one more step on the traced ratio: at the root its derivative is the implicit function's
-    return jnp.exp(_newton_step(jax.lax.stop_gradient(log_kappa), ratio))
+    return jnp.exp(second_order_root(jax.lax.stop_gradient(log_kappa), lambda k: _newton_step(k, ratio)))
 
 
 class HertzPointContact(eqx.Module):

@@ -44,6 +44,7 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float
+from .._numerics import second_order_root
 
 #: Newton steps for one pair's load at a given approach, and for the shared approach.
 LOAD_STEPS = 30
@@ -156,10 +157,12 @@ def shared_rotation(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear:
     theta = lowest + (jnp.max(c, axis=-1) * load + jnp.max(h, axis=-1) * jnp.cbrt(load) ** 2) / m_min
     theta, _ = jax.lax.scan(lambda th, _: (newton(th, *fixed), None), theta, None, length=APPROACH_STEPS)
     theta = jax.lax.stop_gradient(theta)
-    # one Newton step on the traced inputs: the implicit function's derivative at the root
-    value, slope = _residual_and_slope(theta, torque, gaps, arms, linear, hertz)
-    # no pair loaded (zero torque): the rigid contact, differentiable in the gaps
-    return jnp.where(slope > 0.0, theta - value / jnp.where(slope > 0.0, slope, 1.0), jnp.min(gaps / arms, axis=-1))
+
+    def step(theta):  # a Newton step on the traced inputs; no pair loaded (zero torque): the rigid contact
+        value, slope = _residual_and_slope(theta, torque, gaps, arms, linear, hertz)
+        return jnp.where(slope > 0.0, theta - value / jnp.where(slope > 0.0, slope, 1.0), jnp.min(gaps / arms, axis=-1))
+
+    return second_order_root(theta, step)
 
 
 def share_load(torque: ArrayLike, gaps: ArrayLike, arms: ArrayLike, linear: ArrayLike,
