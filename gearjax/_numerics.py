@@ -112,12 +112,13 @@ def smooth_max(x: ArrayLike, axis: int, sharpness: float | None) -> jax.Array:
 
 
 def second_order_root(root: ArrayLike, step) -> jax.Array:
-    r"""A root $x^*$ of $f(x, p) = 0$ found without derivatives (`root` under
-    `stop_gradient`), carrying the implicit function's first and second derivatives in $p$:
-    `step(x)` is one Newton step $N(x) = x - f/f_x$ on the traced $p$. One step from the
-    root gives $x'$ exactly ($N_x = 0$ there) but misses the $f_{xx}x'^2$ term of $x''$;
-    two steps give $x''$ as well. The value is the first step's, bit for bit ($a + (b - a)
-    = b$ for $a, b$ within a factor of two)."""
-    once = step(root)
+    r"""A root $x^*$ of $f(x, p) = 0$ found without derivatives, carrying the implicit
+    function's first and second derivatives in $p$: `step(x)` is one Newton step
+    $N(x) = x - f/f_x$ on the traced $p$, taken from `root` (its derivatives are dropped).
+    One step from the root gives $x'$ exactly ($N_x = 0$ there) but misses the
+    $f_{xx}x'^2$ term of $x''$; two steps give $x''$ as well. The value is the first
+    step's, bit for bit ($a + (b - a) = b$ for $a, b$ within a factor of two; equal values,
+    infinite ones included, add nothing)."""
+    once = step(jax.lax.stop_gradient(root))
     twice = step(once)
-    return twice + jax.lax.stop_gradient(once - twice)
+    return twice + jax.lax.stop_gradient(jnp.where(once == twice, 0.0, once - twice))

@@ -134,6 +134,10 @@ def test_gradients_match_finite_differences():
         np.testing.assert_allclose(grad, fd, rtol=1e-6)
     fd = (ellipse_ratio(5.0 + 1e-6) - ellipse_ratio(5.0 - 1e-6)) / 2e-6
     np.testing.assert_allclose(jax.grad(ellipse_ratio)(5.0), fd, rtol=1e-6)
+    # the second derivative too (`second_order_root`): the impact differentiates rates
+    d_ratio = jax.grad(ellipse_ratio)
+    fd = (d_ratio(5.0 + 1e-4) - d_ratio(5.0 - 1e-4)) / 2e-4
+    np.testing.assert_allclose(jax.grad(d_ratio)(5.0), fd, rtol=1e-6)
 
 
 def test_the_gradient_is_finite_at_a_circular_contact():

@@ -130,3 +130,18 @@ def test_the_second_derivatives_are_the_implicit_functions():
         minus[argnum] -= step
         fd = (d_torque(*plus) - d_torque(*minus)) / (2 * step)
         np.testing.assert_allclose(second[argnum], fd, rtol=1e-5)
+
+
+def test_the_second_order_root_keeps_the_first_steps_value():
+    """`second_order_root` returns the first Newton step's value bit for bit (the second
+    step only adds derivatives), for a finite root and an infinite one (no pair in mesh:
+    the lag is infinite, not NaN)."""
+    from gearjax._numerics import second_order_root
+
+    p = jnp.asarray(2.0)
+    cube_root = lambda x: x - (x**3 - p) / (3.0 * x**2)  # noqa: E731
+    root = jnp.asarray(2.0 ** (1 / 3) * (1 + 1e-6))  # a loose root: the two steps differ
+    assert float(second_order_root(root, cube_root)) == float(cube_root(root))
+    assert float(second_order_root(root, cube_root)) != float(cube_root(cube_root(root)))
+    theta = shared_rotation(1000.0, jnp.full(2, jnp.inf), jnp.full(2, 45.0), jnp.full(2, 2e-5), jnp.full(2, 3e-4))
+    assert np.isposinf(float(theta))

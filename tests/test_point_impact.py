@@ -14,8 +14,8 @@ import gearjax as gj
 from gearjax._solution import RESULTS
 from gearjax.impact.search import SearchContext, evaluate
 from gearjax.io.report import summary
-from gearjax.pipeline import check_codes
 from gearjax.papers.double_arc import SEED_CASE, seed_scene_file
+from gearjax.pipeline import check_codes
 
 from _cases import run_scene_file
 from _notebooks import execute_in_process

@@ -12,8 +12,9 @@ both, their relative difference per zone and input (to the larger magnitude), an
 derivative program's trace and compile time; exits 1 where a difference of the force
 exceeds `--rtol`. The same comparison is printed for what the force is made of (the first
 contact's angle and axial position, the normal velocity, the equivalent mass, the local
-stiffness law), to show where a difference enters. Not part of the test suite: the derivative program's compilation takes about
-7 min and 14 GB of memory on the project's 2-core CPU, beyond the suite's budget.
+stiffness law), to show where a difference enters. Not part of the test suite: the
+derivative program takes about 11 min and 13 GB of memory to trace and compile on the
+project's 2-core CPU, beyond the suite's budget.
 """
 
 from __future__ import annotations

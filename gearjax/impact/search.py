@@ -42,7 +42,8 @@ gear swings through the step, freely or on the remaining pairs, until the incomi
 stops it. That dynamic strike is not the quasi-static mesh-in this module models: the
 search stops and the impact's result is `first_contact_jump`. A jump is found by
 bisection, so it takes about as many evaluations as the bracket has bits above the
-tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged. The values at the last evaluated point, rates included, are the first contact's:
+tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged.
+The values at the last evaluated point, rates included, are the first contact's:
 the search is the only place the single-position TCA/LTCA is traced in a program that
 is not differentiated. The loop is a `lax.while_loop` with a result code, no callbacks.
 
@@ -199,10 +200,11 @@ def _tolerances(ctx: SearchContext, dtype):
 
 
 def _jump(ends, below, h, dh, lower, upper, atol):
-    """The bracket ends' `(H, H')` with the point just evaluated (`below`: it is the lower
-    end), and whether $H$ jumps across zero inside the bracket: from end to end it rises by
-    more than atol and by more than $10^3$ times what the steeper end's slope allows over
-    the bracket's width (a continuous $H$ rises by about that slope times the width)."""
+    """The bracket ends' `(H, H')` (rad, -) with the point just evaluated (`below`: it is
+    the lower end), and whether $H$ jumps across zero inside the bracket `[lower, upper]`
+    (rad): from end to end it rises by more than atol (rad) and by more than $10^3$ times
+    what the steeper end's slope allows over the bracket's width (a continuous $H$ rises by
+    about that slope times the width)."""
     ends = jnp.where(below, ends.at[0].set(jnp.stack([h, dh])), ends.at[1].set(jnp.stack([h, dh])))
     rise = ends[1, 0] - ends[0, 0]
     return ends, (rise > atol) & (rise > 1e3 * jnp.max(jnp.abs(ends[:, 1])) * (upper - lower))
@@ -228,8 +230,8 @@ def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, foun
     29/71 designs had $H > 0$ at the grid's lower end, so the search shrank onto it and
     never converged). Converged once $|H| \\le$ atol and either the Newton step or the bracket is
     below atol + rtol$|\\varphi_1|$ (the tolerances of `Accuracy.newton_atol/rtol`, floored
-    near machine precision); at most `Accuracy.impact_max_steps` evaluations. No gradient
-    flows through the iteration (`first_contact` supplies it).
+    near machine precision); stopped where $H$ jumps (`_jump`); at most `impact_max_steps`
+    evaluations. No gradient flows through the iteration (`first_contact` supplies it).
     """
     ctx, column, lower, upper, gap_lower, gap_upper = jax.lax.stop_gradient(
         (ctx, column, lower, upper, gap_lower, gap_upper)

@@ -20,8 +20,9 @@ $\delta = a^2/R$.
 The elliptic integrals come from the arithmetic–geometric mean (Abramowitz & Stegun
 17.6), in a form without cancellation as $e \to 0$, so the circle is exact; $e$ from
 $B/A$ by Newton's method on $\ln(b/a)$ from Hamrock & Brewe's estimate
-$a/b \approx 1.0339\,(B/A)^{0.636}$ (J. Lubr. Technol. 105, 1983), with the last step
-taken on the traced inputs, so that derivatives are the implicit function's.
+$a/b \approx 1.0339\,(B/A)^{0.636}$ (J. Lubr. Technol. 105, 1983), then two steps on the
+traced inputs, so that first and second derivatives are the implicit function's
+(`_numerics.second_order_root`).
 """
 
 from __future__ import annotations

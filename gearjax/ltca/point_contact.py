@@ -33,8 +33,9 @@ $c_kF_k + h_kF_k^{2/3}$ (linear tooth compliance $c_k$, Hertz coefficient $h_k$,
 $m_k\Theta$ ($m_k$, mm: the TCA's $r_{a2}|n_t|$), so
 $c_kF_k + h_kF_k^{2/3} = \max(m_k\Theta - e_k, 0)$ and the torque on the gear is
 $\sum_k m_kF_k = T$. Each $F_k(\Theta)$ is increasing and convex, so is the torque: $\Theta$
-by Newton's method from above (monotone), the last step taken on the traced inputs so that
-derivatives are the implicit function's. The mesh stiffness follows as
+by Newton's method from above (monotone), then two steps on the traced inputs so that its
+first and second derivatives are the implicit function's (`_numerics.second_order_root`;
+the impact differentiates rates along the pinion angle once more). The mesh stiffness follows as
 $dT/d\Theta = \sum_k m_k^2\,dF_k/d\delta_k$.
 """
 
