@@ -49,13 +49,12 @@ gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False
 #: (`GEARJAX_TEST_PROFILE` and `tools/test_profile.py`). Only the schedule uses them: the
 #: order matters, not the values; most of each is tracing and compiling.
 FILE_COSTS = {
-    "test_optimize.py": 525, "test_sweep.py": 308, "test_impact.py": 282, "test_notebooks.py": 230,
-    "test_hard_cases.py": 143, "test_ltca.py": 138, "test_impact_convergence.py": 135, "test_results.py": 130,
-    "test_point_impact.py": 1000, "test_point_ltca.py": 650, "test_hard_cases_double_arc.py": 106,
-    "test_hard_cases_curvilinear.py": 100, "test_tca.py": 80,
-    "test_cli.py": 80, "test_transforms.py": 70, "test_scene.py": 58, "test_hard_cases_ratios.py": 54,
-    "test_curvilinear.py": 45, "test_cache.py": 29, "test_designs.py": 27, "test_double_arc.py": 22,
-    "test_scene_fuzz.py": 20, "test_resources.py": 11,
+    "test_optimize.py": 734, "test_sweep.py": 434, "test_impact.py": 430, "test_impact_convergence.py": 298,
+    "test_point_impact.py": 284, "test_notebooks.py": 258, "test_hard_cases.py": 247, "test_ltca.py": 229,
+    "test_results.py": 194, "test_point_ltca.py": 161, "test_hard_cases_curvilinear.py": 156, "test_cli.py": 115,
+    "test_tca.py": 108, "test_transforms.py": 85, "test_scene.py": 69, "test_hard_cases_ratios.py": 67,
+    "test_curvilinear.py": 62, "test_hard_cases_double_arc.py": 41, "test_cache.py": 40, "test_designs.py": 34,
+    "test_scene_fuzz.py": 27, "test_point_analysis.py": 27, "test_hertz_point.py": 22, "test_double_arc.py": 21,
 }
 
 
