@@ -187,3 +187,24 @@ def test_a_flank_without_depth_gives_the_same_point_and_tangent():
                 zeros = generic_slice_point_tangent(zone, gear, u, 7.0, 0.3, lambda t: jnp.zeros_like(t))
                 for a, b in zip(bare, zeros):
                     np.testing.assert_array_equal(a, b)
+
+
+def test_a_flank_with_nothing_applied_has_a_python_zero_depth():
+    """`FlankDepth` gives a Python 0.0 (nothing traced) for a flank with no modification and
+    no error, in the normal and in the transverse section; where a relief is applied the
+    transverse depth is the normal depth over $|n_t|$ and positive in the relief."""
+    from gearjax import FlankModification, MeshErrors
+    from gearjax.geometry.depth import FlankDepth
+
+    pair = InvoluteGearPair((23, 37), 4.0, 20.0, 15.0, 40.0).resolve()
+    tip = float(pair.profile_limits(0)[1])
+    relief = FlankDepth(pinion=FlankModification(tip_relief=0.008, tip_relief_length=3.0))
+    assert relief(pair, 1, 0, tip, 5.0) == 0.0 and type(relief(pair, 1, 0, tip, 5.0)) is float
+    assert type(relief.transverse(pair, 1, 0, tip, 5.0)) is float
+    assert not relief.is_zero and FlankDepth().is_zero and not FlankDepth(errors=MeshErrors()).is_zero
+    normal = relief(pair, 0, 0, tip, 5.0)
+    assert float(normal) > 0.0
+    np.testing.assert_allclose(relief.transverse(pair, 0, 0, tip, 5.0),
+                               normal / pair.transverse_normal_fraction(0, tip, 5.0), rtol=1e-15)
+    errors = FlankDepth(errors=MeshErrors())
+    assert errors.applies_to(0) and not errors.applies_to(1) and type(errors(pair, 1, 0, tip, 5.0)) is float

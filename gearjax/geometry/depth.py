@@ -15,8 +15,9 @@ from .modification import FlankModification
 class FlankDepth(eqx.Module):
     """Sum of the flank modifications of both gears and the mesh errors.
 
-    `None` entries contribute nothing and are not traced, so a scene without modification
-    compiles no relief term.
+    `None` entries contribute nothing and are not traced: the depth of a flank with nothing
+    applied is a Python `0.0`, so a scene without modification compiles no relief term and
+    the geometry skips the flank normal that a depth would need (`generic_slice_point`).
 
     Attributes:
         pinion: modification of the pinion drive flank, or None.
@@ -30,9 +31,11 @@ class FlankDepth(eqx.Module):
 
     def __call__(
         self, pair: AbstractFlankPair, gear: int, pair_index: ArrayLike, u: ArrayLike, z: ArrayLike
-    ) -> Scalar:
+    ) -> Scalar | float:
         """Depth (mm) on the flank of `gear` of tooth pair `pair_index` at profile parameter
-        `u` (mm) and axial position `z` (mm)."""
+        `u` (mm) and axial position `z` (mm); `0.0` where nothing is applied to that flank."""
+        if not self.applies_to(gear):
+            return 0.0
         depth = jnp.zeros(jnp.broadcast_shapes(jnp.shape(u), jnp.shape(z)), dtype=jnp.result_type(float))
         modification = self.pinion if gear == 0 else self.gear
         if modification is not None:
@@ -44,6 +47,14 @@ class FlankDepth(eqx.Module):
                 depth = depth + self.errors.depth(pair_index, z, pair.face_width)
         return depth
 
+    def transverse(self, pair: AbstractFlankPair, gear: int, pair_index: ArrayLike, u: ArrayLike,
+                   z: ArrayLike) -> Scalar | float:
+        """The depth in the transverse section (mm): the normal depth over $|n_t|$
+        (`transverse_normal_fraction`); `0.0` where nothing is applied to the flank."""
+        if not self.applies_to(gear):
+            return 0.0
+        return self(pair, gear, pair_index, u, z) / pair.transverse_normal_fraction(gear, u, z)
+
     def applies_to(self, gear: int) -> bool:
         """False when nothing is applied to `gear`'s flank (static): its depth is zero and
         need not be traced."""
@@ -52,4 +63,4 @@ class FlankDepth(eqx.Module):
     @property
     def is_zero(self) -> bool:
         """True when nothing is applied (static)."""
-        return self.pinion is None and self.gear is None and self.errors is None
+        return not (self.applies_to(0) or self.applies_to(1))

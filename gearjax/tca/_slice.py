@@ -64,8 +64,8 @@ def _starts(problem: SliceProblem):
     dom1, dom2 = pair.parameter_domain(0), pair.parameter_domain(1)
     # Offset: the first-order (plane-of-action) value, the sum of both flanks' transverse
     # depths at the conjugate point turned into a gear rotation.
-    depth1 = problem.depth(pair, 0, problem.pair_index, g1, problem.z) / pair.transverse_normal_fraction(0, g1, problem.z)
-    depth2 = problem.depth(pair, 1, problem.pair_index, g2, problem.z) / pair.transverse_normal_fraction(1, g2, problem.z)
+    depth1 = problem.depth.transverse(pair, 0, problem.pair_index, g1, problem.z)
+    depth2 = problem.depth.transverse(pair, 1, problem.pair_index, g2, problem.z)
     offset = jnp.broadcast_to(-(depth1 + depth2) / pair.action_radius(1), u1.shape)
     return jnp.stack([jnp.clip(u1, *dom1), jnp.clip(u2, *dom2), offset], axis=-1)
 

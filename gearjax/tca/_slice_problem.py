@@ -17,6 +17,8 @@ pinion flank, first meets it. Three kinds of first contact are possible:
 
 from __future__ import annotations
 
+import functools as ft
+
 import equinox as eqx
 import jax.numpy as jnp
 
@@ -56,16 +58,15 @@ class SliceProblem(eqx.Module):
     z: Scalar  # axial position of the slice (mm)
     pinion_rotation: Scalar  # Phi_1, lead rotation included (rad)
 
-    def _depth(self, gear):
-        """The depth (mm) of `gear`'s flank in this slice as a function of $u$; None where
-        nothing is applied to it (then nothing is traced)."""
-        if not self.depth.applies_to(gear):
-            return None
-        return lambda u: self.depth(self.pair, gear, self.pair_index, u, self.z)
-
     def _depth_at(self, gear, u):
-        depth = self._depth(gear)
-        return 0.0 if depth is None else depth(u)
+        """The depth (mm) of `gear`'s flank in this slice at $u$ (`FlankDepth`: a Python 0.0
+        where nothing is applied to it)."""
+        return self.depth(self.pair, gear, self.pair_index, u, self.z)
+
+    def _depth(self, gear):
+        """`_depth_at` as a function of $u$; None where nothing is applied to the flank (then
+        the tangent traces no depth)."""
+        return ft.partial(self._depth_at, gear) if self.depth.applies_to(gear) else None
 
     def _gear_rotation(self, offset):
         return self.pinion_rotation / self.pair.gear_ratio + offset

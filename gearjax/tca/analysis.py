@@ -192,8 +192,7 @@ def _plane_of_action_slice(pair, depth, k, z, phi1) -> SliceContact:
     lo1, hi1 = pair.profile_limits(0)
     lo2, hi2 = pair.profile_limits(1)
     ok = (u1 >= lo1) & (u1 <= hi1) & (u2 >= lo2) & (u2 <= hi2)
-    total = depth(pair, 0, problem.pair_index, u1, z) / pair.transverse_normal_fraction(0, u1, z)
-    total = total + depth(pair, 1, problem.pair_index, u2, z) / pair.transverse_normal_fraction(1, u2, z)
+    total = depth.transverse(pair, 0, problem.pair_index, u1, z) + depth.transverse(pair, 1, problem.pair_index, u2, z)
     offset = -total / pair.action_radius(1)
     return SliceContact(
         offset=jnp.where(ok, offset, -jnp.inf),
