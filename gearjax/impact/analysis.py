@@ -38,7 +38,7 @@ from .._numerics import safe_divide
 from .._solution import RESULTS, enum_name, enum_where, first_failure
 from ..ltca.analysis import LTCAResult, _levers, moment_arms
 from ..ltca.model import ContactModel
-from ..ltca.point_analysis import ToothSectionCompliance, point_contact_analysis
+from ..ltca.point_analysis import ToothSectionCompliance, point_coefficients
 from ..tca import ContactKind, TCAResult
 from ..tca._slice_problem import contact_kind
 from .energy import base_radius_equivalent_mass, equivalent_mass, gear_inertia, impact_force
@@ -190,9 +190,9 @@ def _local_fit(ctx: SearchContext, tca: TCAResult, column, p_arm) -> LocalStiffn
     normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
     reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
     if isinstance(ctx.model.compliance, ToothSectionCompliance):
-        point = point_contact_analysis(pair, tca, ctx.torque, ctx.model.material, ctx.model.compliance.coupling_length)
-        return point_local_stiffness(point.linear_compliance[0, column], point.hertz_coefficient[0, column],
-                                     reference, acc)
+        _, coefficients = point_coefficients(pair, tca, ctx.model.material, ctx.model.compliance.coupling_length)
+        hertz, linear = coefficients[0, column, 0], coefficients[0, column, 1]
+        return point_local_stiffness(linear, hertz, reference, acc)
     n_mid = acc.face_slices
     model = ctx.model
     points = model.compliance(pair, model.material, model.hub_radius, tca, n_mid, acc.quadrature_points,

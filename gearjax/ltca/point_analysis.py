@@ -227,6 +227,33 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
             "between": (start, other, weight)}
 
 
+def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length_mn: float = 1.1,
+                       sections: tuple[ToothSection, ToothSection] | None = None):
+    """Each pair's point contact located between the TCA's face slices (`closest_contact`)
+    and its coefficients there, (pos, pair, 4): the Hertz coefficient $h$ of
+    $\\delta = cF + hF^{2/3}$ (mm/N^(2/3)), the linear compliance $c$ (mm/N: both teeth's
+    sections and the spreading along the face) and the two principal relative curvatures
+    (1/mm). Pairs out of mesh get finite coefficients of no meaning; `point_contact_analysis`
+    replaces them."""
+    if sections is None:
+        sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
+    decay_length = coupling_length_mn * pair.normal_module
+    contact = closest_contact(tca)
+    j, gaps, u1, u2, z, te, frac = (contact[name] for name in ("slice", "gap", "u1", "u2", "z", "te", "frac"))
+    normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
+    phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
+    k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
+    # Each zone's coefficients for every pair, then each pair's own zone's: the zones' pair
+    # windows need not be the same length (`tca.merge_zones`), so the axis is not split.
+    per_zone = []
+    for zone in pair.contact_zones():
+        per_zone.append(jnp.vectorize(
+            lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
+            signature="(),(),(),(),(),(),(3),()->(4)",
+        )(k, phi1, u1, u2, z, te, normal, frac))
+    return contact, jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
+
+
 def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material | None = None,
                            coupling_length_mn: float = 1.1,
                            sections: tuple[ToothSection, ToothSection] | None = None,
@@ -251,27 +278,11 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
     Returns:
         `PointContactLoads`.
     """
-    zones = pair.contact_zones()
     material = Material() if material is None else material
-    if sections is None:
-        sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
-    decay_length = coupling_length_mn * pair.normal_module
-    contact = closest_contact(tca)
-    j, gaps, u1, u2, z, te, frac = (contact[name] for name in ("slice", "gap", "u1", "u2", "z", "te", "frac"))
+    contact, coefficients = point_coefficients(pair, tca, material, coupling_length_mn, sections)
+    j, gaps, z, frac = (contact[name] for name in ("slice", "gap", "z", "frac"))
     if active_pairs is not None:
         gaps = jnp.where(active_pairs, gaps, jnp.inf)
-    normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
-    phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
-    k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
-    # Each zone's coefficients for every pair, then each pair's own zone's: the zones' pair
-    # windows need not be the same length (`tca.merge_zones`), so the axis is not split.
-    per_zone = []
-    for zone in zones:
-        per_zone.append(jnp.vectorize(
-            lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
-            signature="(),(),(),(),(),(),(3),()->(4)",
-        )(k, phi1, u1, u2, z, te, normal, frac))
-    coefficients = jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
     finite = jnp.isfinite(gaps)
     # pairs out of mesh have no contact: unit coefficients keep their (zero) loads finite
     coefficients = jnp.where(finite[..., None], coefficients, 1.0)
