@@ -7,12 +7,14 @@ ellipses are those of the seed's teeth."""
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import gearjax as gj
-from gearjax.ltca.point_analysis import MIN_CURVATURE, ToothSection, point_contact_analysis
+from gearjax.ltca.point_analysis import (MIN_CURVATURE, ToothSection, closest_contact, parabola_peak,
+                                         point_contact_analysis)
 from gearjax.papers.double_arc import SEED_CASE
 
 WINDOW = (-2, -1, 0, 1, 2, 3)  # test_hard_cases_double_arc.py's
@@ -102,3 +104,74 @@ def test_the_tooth_section_runs_from_the_root_circle_to_the_tip(seed):
         assert (np.diff(x) >= 0).all() and (h > 0).all()
         # thickest at the root, thinnest at the tip
         assert h[0] == pytest.approx(h.max()) and h[-1] < 0.5 * h[0]
+
+
+def _synthetic(tca, te, kinds=0, **fields):
+    """`tca` with slice TEs `te` (rad, per slice) at every position and pair, every slice
+    valid and of candidate `kinds` (0: flank; per slice or one for all), and `fields`."""
+    shape = tca.slice_te.shape
+    kind = jax.tree_util.tree_map(lambda _: jnp.broadcast_to(jnp.asarray(kinds, jnp.int32), shape), tca.kind)
+    names = ("slice_te", "valid", "kind", *fields)
+    values = (jnp.broadcast_to(te, shape), jnp.ones(shape, bool), kind, *fields.values())
+    return eqx.tree_at(lambda t: tuple(getattr(t, n) for n in names), tca, values)
+
+
+@pytest.mark.parametrize("end, spacings", [(0.0, 0.3), (1.0, -0.2), (-1.0, 0.3), (1.0, 0.5)])
+def test_a_peak_near_a_face_end_is_located_as_one_mid_face(seed, end, spacings):
+    """`closest_contact` on slice TEs that are a parabola along the face finds its vertex
+    and value exactly (to rounding) wherever it lies (`spacings` slice spacings from
+    mid-face or from the face end `end`): between two middle slices, between the outer middle
+    slice and a face end (half a spacing away, a node of the fit), or beyond the face (then at
+    the end, with the end's value). Fields are
+    interpolated linearly at the located point: a pinion parameter equal to z comes back as
+    the located z, a constant normal as itself."""
+    _, tca, _ = seed
+    z = np.asarray(tca.slice_z)
+    n_mid = z.size - 2
+    half = float(z[-1])
+    vertex = end * half + spacings * 2.0 * half / n_mid
+    te = 1e-3 - 2e-5 * (z - vertex) ** 2  # rad, z in mm
+    shape = tca.slice_te.shape
+    normal = np.broadcast_to(np.array([0.6, 0.0, 0.8]), shape + (3,))
+    contact = closest_contact(_synthetic(tca, te, pinion_parameter=jnp.broadcast_to(z, shape), normal=jnp.asarray(normal)))
+    expected = np.clip(vertex, -half, half)
+    np.testing.assert_allclose(contact["z"], expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(contact["te"], 1e-3 - 2e-5 * (expected - vertex) ** 2, rtol=1e-13)
+    np.testing.assert_allclose(contact["u1"], expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(contact["normal"], normal[..., 0, :], rtol=1e-15)
+
+
+def test_the_parabolas_vertex_is_exact_for_any_spacing():
+    """`parabola_peak` through three unequally spaced points of a downward parabola gives its
+    vertex and value; one opening upwards gives the middle point."""
+    x = (-1.0, 0.5, 1.5)
+    y = tuple(2.0 - 3.0 * (v - 0.2) ** 2 for v in x)
+    vertex, peak, concave = parabola_peak(x, y)
+    assert bool(concave)
+    np.testing.assert_allclose([vertex, peak], [0.2, 2.0], rtol=1e-14)
+    vertex, peak, concave = parabola_peak(x, tuple(-v for v in y))
+    assert not bool(concave) and float(vertex) == 0.5 and float(peak) == -y[1]
+    # a vertex beyond the outer point is clipped to it, with the parabola's value there
+    vertex, peak, _ = parabola_peak((-1.0, 0.0, 1.0), (0.0, 1.0, 1.5))
+    assert float(vertex) == 1.0 and float(peak) == 1.5
+
+
+def test_no_parabola_is_fitted_across_a_change_of_contact_kind(seed):
+    """Where a tip edge binds in the slice beside the largest one (the slice TE steps there),
+    the largest slice is the contact, not the vertex of a parabola through the step: here
+    the face end, with its own value, not the vertex that a fit through the step would put
+    inside the face above it."""
+    from gearjax.tca._slice_problem import CANDIDATES
+
+    _, tca, _ = seed
+    z = np.asarray(tca.slice_z)
+    n_mid = z.size - 2
+    te = np.where(z > z[n_mid - 2] + 1e-9, -4e-4 + 1e-4 * (z - z[-1]), -4e-3)  # a step below the last two
+    kinds = np.where(z > z[n_mid - 2] + 1e-9, 0, 2)
+    assert bool(jnp.all((_synthetic(tca, te, kinds).kind == CANDIDATES[2]) == (kinds == 2)))
+    contact = closest_contact(_synthetic(tca, te, kinds))
+    np.testing.assert_array_equal(contact["z"], z[-1])
+    np.testing.assert_array_equal(contact["te"], -4e-4)
+    # with one kind throughout, the same values give a vertex inside the face, above the end
+    same = closest_contact(_synthetic(tca, te))
+    assert (np.asarray(same["z"]) < z[-1]).all() and (np.asarray(same["te"]) > -4e-4).all()

@@ -99,16 +99,21 @@ def test_a_gap_that_jumps_across_zero_is_reported_as_a_jump(struck):
     """At Δ_α = +0.373 mm (a pitch-circle error of 0.1 mm) the rigid TE tilts by about
     2 000 µrad per pitch and drops by about 690 µrad at the convex tooth's hand-over
     (notebook 02): that zone's gap H jumps across zero, with no root. The search
-    stops there, well within `impact_max_steps`, with `first_contact_jump`; H on either side
-    of the located angle is far from zero, of opposite signs."""
+    stops there with `first_contact_jump`, once its bracket has halved from the grid step to
+    the tolerance (so within `impact_max_steps`); H on either side of the located angle is
+    far from zero, of opposite signs."""
     scene, _, _ = struck
     # the fixture's program: Δ_α is a leaf (kept strongly typed)
     tilted = eqx.tree_at(lambda s: s.pair.axial_pitch_error, scene, scene.pair.axial_pitch_error + 0.3732)
     imp = gj.simulate(tilted, throw=False).impact
     jumped = np.asarray(imp.result == RESULTS.first_contact_jump)
     assert jumped[0]
-    steps = np.asarray(imp.search_steps)
-    assert (steps[jumped] < scene.accuracy.impact_max_steps).all()
+    # found by the bracket's halving: at most its bits above atol, the first point and both ends more
+    _, atol = scene.accuracy.newton_tolerances(np.float64)
+    grid_step = 2.0 * np.pi / scene.pair.teeth[0] / scene.accuracy.positions_per_pitch
+    bisections = int(np.ceil(np.log2(grid_step / atol)))
+    assert (np.asarray(imp.search_steps)[jumped] <= bisections + 3).all(), (imp.search_steps, bisections)
+    assert bisections + 3 < scene.accuracy.impact_max_steps
     for z, gap in enumerate(_gaps(tilted, imp)):
         if jumped[z]:
             root = imp.pinion_angle[z]

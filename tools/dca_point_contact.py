@@ -114,13 +114,13 @@ def peak_errors(accuracy: str, slice_counts: list[int]) -> list[dict]:
             zs, ts = z[ok], row[ok]
             top = int(np.argmax(ts))
             if zs[top] - zs[0] < spacing or zs[-1] - zs[top] < spacing:
-                continue  # a peak at the face end: `closest_contact` takes the end slice there
+                continue  # within a spacing of a face end: `closest_contact` fits through the end there
             for offset in np.linspace(0.0, spacing, 10, endpoint=False):
                 v = np.interp(np.arange(zs[0] + offset, zs[-1], spacing), zs, ts)
                 j = int(np.argmax(v))
                 if j == 0 or j == v.size - 1:
                     continue
-                _, peak, _ = parabola_peak(v[j - 1], v[j], v[j + 1])
+                _, peak, _ = parabola_peak((-1.0, 0.0, 1.0), (v[j - 1], v[j], v[j + 1]))
                 errors.append(float(peak) - ts[top])
         rows.append({"accuracy": accuracy, "face_slices": count, "spacing_mm": round(float(spacing), 3),
                      "samples": len(errors), "peak_error_um": [round(float(np.min(errors)), 3),

@@ -69,7 +69,7 @@ from ..ltca.analysis import LTCAResult, loaded_contact_analysis
 from ..ltca.model import ContactModel
 from ..ltca.point_analysis import closest_contact
 from ..tca import TCAResult, tooth_contact_analysis
-from ..tca._slice_problem import CANDIDATES, SliceContact
+from ..tca._slice_problem import SliceContact, kind_index
 from ..tca.face_peak import FacePeak, face_peak
 
 
@@ -147,14 +147,13 @@ def point_peak(tca: TCAResult, column) -> tuple[FacePeak, Scalar]:
         offset=located["te"][0, column],
         pinion_parameter=located["u1"][0, column],
         gear_parameter=located["u2"][0, column],
-        kind=sum(i * (kind == c).astype(jnp.int32) for i, c in enumerate(CANDIDATES)),
+        kind=kind_index(kind),
         valid=touching[column],
         unconverged=tca.unconverged[0, column, nearest],
     )
-    normal = at(tca.normal)
     te = jnp.where(touching[column], located["te"][0, column], -jnp.inf)
     peak = FacePeak(located["z"][0, column], te, contact, at(tca.pinion_point), at(tca.gear_point),
-                    normal / jnp.linalg.norm(normal), at(tca.relative_velocity))
+                    located["normal"][0, column], at(tca.relative_velocity))
     return peak, jnp.max(jnp.where(touching, located["te"][0], -jnp.inf))
 
 

@@ -2,7 +2,8 @@ r"""Loaded contact of a double-circular-arc pair: each tooth pair of each contac
 touches at one point, which the TCA finds (`gearjax.tca`), and carries its share of the
 torque through its teeth's compliance and a Hertz point contact (`point_contact`).
 
-Per position and tooth pair (both zones), at the pair's closest slice contact of the TCA:
+Per position and tooth pair (both zones), at the pair's contact located between the TCA's
+face slices (`closest_contact`, the face ends among them):
 
 * the rigid gap $e_k$ (the TCA's separation, mm) and the arm $m_k = r_{a2}|n_t|$ (mm per
   radian of the gear's lag, the TCA's own conversion);
@@ -31,10 +32,12 @@ import jax
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Bool, Float
+from .._numerics import safe_divide, safe_norm
 from .._validate import check_range
 from ..geometry._base import SceneFileSpec
 from ..geometry.double_arc import DoubleArcGearPair
 from ..tca import TCAResult
+from ..tca._slice_problem import kind_index
 from ..units import Material
 from .compliance import AbstractCompliance
 from .hertz_point import effective_modulus, hertz_point_contact, relative_curvatures
@@ -174,57 +177,72 @@ def _contact_coefficients(zone, sections, k, phi1, u1, u2, z, te, normal, frac, 
     return hertz, linear, a_curv, b_curv
 
 
-def parabola_peak(left: ArrayLike, here: ArrayLike, right: ArrayLike) -> tuple[Array, Array, Array]:
-    """The vertex of the parabola through three equally spaced values: `(x, peak, concave)`,
-    its offset $x$ from the middle one in spacings (clipped to $[-1, 1]$), its value there,
-    and whether it opens downwards (where not, `x` is 0 and `peak` the middle value)."""
-    curvature = left - 2.0 * here + right
+def parabola_peak(x: tuple[ArrayLike, ArrayLike, ArrayLike],
+                  y: tuple[ArrayLike, ArrayLike, ArrayLike]) -> tuple[Array, Array, Array]:
+    """The vertex of the parabola through three points $x_0 < x_1 < x_2$ (any spacing):
+    `(x, peak, concave)`, its abscissa clipped to $[x_0, x_2]$, the parabola's value there,
+    and whether it opens downwards (where not, `x` is $x_1$ and `peak` $y_1$).
+
+    In Newton's form $y = y_0 + d_1(x - x_0) + A(x - x_0)(x - x_1)$, with
+    $d_1 = (y_1 - y_0)/(x_1 - x_0)$ and $A = (d_2 - d_1)/(x_2 - x_0)$, the vertex is
+    $x^* = (x_0 + x_1)/2 - d_1/(2A)$."""
+    (x0, x1, x2), (y0, y1, y2) = x, y
+    d1, d2 = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+    curvature = (d2 - d1) / (x2 - x0)
     concave = curvature < 0.0
     safe = jnp.where(concave, curvature, -1.0)
-    x = jnp.where(concave, jnp.clip(-(right - left) / (2.0 * safe), -1.0, 1.0), 0.0)
-    return x, here + 0.5 * x * (right - left) + 0.5 * x * x * safe, concave  # x = 0 where not concave
+    vertex = jnp.where(concave, jnp.clip(0.5 * (x0 + x1) - 0.5 * d1 / safe, x0, x2), x1)
+    value = y0 + (vertex - x0) * (d1 + safe * (vertex - x1))
+    return vertex, jnp.where(concave, value, y1), concave
 
 
 def closest_contact(tca: TCAResult) -> dict[str, Array]:
-    """Each pair's point contact, (pos, pair): between the TCA's face slices, where the
-    parabola through the largest slice TE and its neighbours peaks (a face-end contact where
-    that is larger). Returns the nearest slice `slice`, the rigid normal gap `gap` (mm, from
-    the largest of the pairs' peaks; `inf` out of mesh), the profile parameters `u1`, `u2`
-    and axial position `z` (mm, interpolated), the peak TE `te` (rad), `frac` ($|n_t|$) and
-    `between`, the slices `(start, other)` and the weight of `other` that interpolate
-    there."""
+    """Each pair's point contact, (pos, pair): where the parabola through the largest slice
+    TE and its neighbours along the face peaks. The face ends count as slices at their own
+    positions (the TCA's last two), half a spacing from the first and last middle slice, so
+    a peak near an end is located as one mid-face, and a peak at an end is the end's contact.
+    The slice TE is smooth along the face only while the same candidate binds (a tip edge
+    taking over from the flank contact is a kink or a step), so where the three slices'
+    contact kinds differ the largest slice is the contact.
+    Returns the nearest slice `slice`, the rigid normal gap `gap` (mm, from the largest of
+    the pairs' peaks; `inf` out of mesh), the profile parameters `u1`, `u2`, the axial
+    position `z` (mm), `frac` ($|n_t|$) and the contact normal `normal`, interpolated
+    linearly between the two slices around the peak, the peak TE `te` (rad), and `between`,
+    those slices `(start, other)` and the weight of `other`."""
     n_mid = tca.slice_z.shape[-1] - 2
-    te = jnp.where(tca.valid, tca.slice_te, -jnp.inf)
-    mid = te[..., :n_mid]
-    best = jnp.argmax(mid, axis=-1)
-    centre = jnp.clip(best, 1, n_mid - 2)
+    order = jnp.asarray([n_mid, *range(n_mid), n_mid + 1])  # the slices along the face
+    z_sorted = tca.slice_z[order]
+    te = jnp.where(tca.valid, tca.slice_te, -jnp.inf)[..., order]
+    best = jnp.argmax(te, axis=-1)
+    centre = jnp.clip(best, 1, n_mid)
     pick = lambda x, k: jnp.take_along_axis(x, k[..., None], axis=-1)[..., 0]  # noqa: E731
-    left, here, right = pick(mid, centre - 1), pick(mid, centre), pick(mid, centre + 1)
-    ok = (best == centre) & jnp.isfinite(left) & jnp.isfinite(right)
-    x, peak, concave = parabola_peak(jnp.where(ok, left, 0.0), here, jnp.where(ok, right, 0.0))
+    left, here, right = pick(te, centre - 1), pick(te, centre), pick(te, centre + 1)
+    kind = kind_index(tca.kind)[..., order]
+    same_kind = (pick(kind, centre - 1) == pick(kind, centre)) & (pick(kind, centre + 1) == pick(kind, centre))
+    ok = jnp.isfinite(left) & jnp.isfinite(right) & same_kind
+    nodes = (z_sorted[centre - 1], z_sorted[centre], z_sorted[centre + 1])
+    z, peak, concave = parabola_peak(nodes, (jnp.where(ok, left, 0.0), here, jnp.where(ok, right, 0.0)))
     ok = ok & concave
-    x = jnp.where(ok, x, 0.0)
-    peak = jnp.where(ok, peak, pick(mid, best))
-    ends = jnp.max(te[..., n_mid:], axis=-1)
-    at_end = ends > peak
-    slice_index = jnp.where(at_end, n_mid + jnp.argmax(te[..., n_mid:], axis=-1), best)
-    neighbour = jnp.where(x >= 0.0, centre + 1, centre - 1)
-    weight = jnp.where(at_end, 0.0, jnp.abs(x))
-    start = jnp.where(at_end, slice_index, jnp.where(ok, centre, best))
-    other = jnp.where(at_end, slice_index, neighbour)
+    z = jnp.where(ok, z, z_sorted[best])
+    peak = jnp.where(ok, peak, pick(te, best))
+    # the two slices around z and the weight of the outer one
+    start = jnp.where(ok, centre, best)
+    outer = jnp.where(z >= nodes[1], centre + 1, centre - 1)
+    other = jnp.where(ok, outer, best)
+    weight = jnp.where(ok, (z - nodes[1]) / (z_sorted[outer] - nodes[1]), 0.0)
+    start, other = order[start], order[other]
 
     def interpolate(field):
         return (1.0 - weight) * pick(field, start) + weight * pick(field, other)
 
-    peak = jnp.maximum(peak, ends)
-    frac = pick(tca.transverse_normal_fraction, slice_index)
+    normal = jax.vmap(interpolate, in_axes=-1, out_axes=-1)(tca.normal)
+    frac = interpolate(tca.transverse_normal_fraction)
     finite = jnp.isfinite(peak)
     top = jnp.max(peak, axis=-1, keepdims=True)
     gap = jnp.where(finite, (top - jnp.where(finite, peak, 0.0)) * tca.action_radius[1] * frac, jnp.inf)
-    z = (1.0 - weight) * tca.slice_z[start] + weight * tca.slice_z[other]
-    return {"slice": slice_index, "gap": gap, "u1": interpolate(tca.pinion_parameter),
+    return {"slice": jnp.where(weight > 0.5, other, start), "gap": gap, "u1": interpolate(tca.pinion_parameter),
             "u2": interpolate(tca.gear_parameter), "z": z, "te": jnp.where(finite, peak, 0.0), "frac": frac,
-            "between": (start, other, weight)}
+            "normal": safe_divide(normal, safe_norm(normal)[..., None]), "between": (start, other, weight)}
 
 
 def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length_mn: float = 1.1,
@@ -239,8 +257,7 @@ def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length
         sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
     decay_length = coupling_length_mn * pair.normal_module
     contact = closest_contact(tca)
-    j, gaps, u1, u2, z, te, frac = (contact[name] for name in ("slice", "gap", "u1", "u2", "z", "te", "frac"))
-    normal = jnp.take_along_axis(tca.normal, j[..., None, None], axis=-2)[..., 0, :]
+    gaps, u1, u2, z, te, frac, normal = (contact[name] for name in ("gap", "u1", "u2", "z", "te", "frac", "normal"))
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
     # Each zone's coefficients for every pair, then each pair's own zone's: the zones' pair
@@ -260,9 +277,10 @@ def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Ma
                            active_pairs: Bool[Array, " pair"] | None = None) -> PointContactLoads:
     """Loaded contact of a `DoubleArcGearPair` over the TCA's positions.
 
-    Each contact is located between the TCA's face slices by a parabola through three of
-    them, so the slices must be close compared with the width of a point contact's peak
-    (decision 0009 measures which grids converge: the `fast` preset's 9 slices do not).
+    Each contact is located between the TCA's face slices, the face ends among them, by a
+    parabola through three of them (`closest_contact`), so the slices must be close
+    compared with the width of a point contact's peak (decision 0009 measures which grids
+    converge: the `fast` preset's 9 slices do not).
 
     Args:
         pair: the resolved pair.

@@ -49,6 +49,11 @@ def contact_kind(index) -> ContactKind:
     return enum_select(index, CANDIDATES)
 
 
+def kind_index(kind: ContactKind):
+    """The candidate indices of `ContactKind`s (the inverse of `contact_kind`; traceable)."""
+    return sum(i * (kind == c).astype(jnp.int32) for i, c in enumerate(CANDIDATES))
+
+
 class SliceProblem(eqx.Module):
     """Data of one (tooth pair, slice, pinion position) contact problem."""
 
