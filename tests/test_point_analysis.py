@@ -111,8 +111,9 @@ def _synthetic(tca, te, kinds=0, **fields):
     valid and of candidate `kinds` (0: flank; per slice or one for all), and `fields`."""
     shape = tca.slice_te.shape
     kind = jax.tree_util.tree_map(lambda _: jnp.broadcast_to(jnp.asarray(kinds, jnp.int32), shape), tca.kind)
-    names = ("slice_te", "valid", "kind", *fields)
-    values = (jnp.broadcast_to(te, shape), jnp.ones(shape, bool), kind, *fields.values())
+    fields = {"valid": jnp.ones(shape, bool), **fields}
+    names = ("slice_te", "kind", *fields)
+    values = (jnp.broadcast_to(te, shape), kind, *fields.values())
     return eqx.tree_at(lambda t: tuple(getattr(t, n) for n in names), tca, values)
 
 
@@ -132,13 +133,21 @@ def test_a_peak_near_a_face_end_is_located_as_one_mid_face(seed, end, spacings):
     vertex = end * half + spacings * 2.0 * half / n_mid
     te = 1e-3 - 2e-5 * (z - vertex) ** 2  # rad, z in mm
     shape = tca.slice_te.shape
-    normal = np.broadcast_to(np.array([0.6, 0.0, 0.8]), shape + (3,))
+    tilt = 0.02 * z  # rad: a normal turning along the face
+    normal = np.broadcast_to(np.stack([np.sin(tilt), 0.0 * z, np.cos(tilt)], -1), shape + (3,))
     contact = closest_contact(_synthetic(tca, te, pinion_parameter=jnp.broadcast_to(z, shape), normal=jnp.asarray(normal)))
     expected = np.clip(vertex, -half, half)
     np.testing.assert_allclose(contact["z"], expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(contact["te"], 1e-3 - 2e-5 * (expected - vertex) ** 2, rtol=1e-13)
     np.testing.assert_allclose(contact["u1"], expected, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(contact["normal"], normal[..., 0, :], rtol=1e-15)
+    # the normal: the unit vector of the linear blend of the two nodes' normals around z
+    nodes = np.sort(z)
+    right = np.clip(np.searchsorted(nodes, expected), 1, nodes.size - 1)
+    w = (expected - nodes[right - 1]) / (nodes[right] - nodes[right - 1])
+    blend = (1 - w) * np.stack([np.sin(0.02 * nodes[right - 1]), 0.0, np.cos(0.02 * nodes[right - 1])]) + w * np.stack(
+        [np.sin(0.02 * nodes[right]), 0.0, np.cos(0.02 * nodes[right])])
+    np.testing.assert_allclose(contact["normal"], np.broadcast_to(blend / np.linalg.norm(blend), shape[:2] + (3,)),
+                               rtol=0, atol=1e-13)
 
 
 def test_the_parabolas_vertex_is_exact_for_any_spacing():
@@ -175,3 +184,27 @@ def test_no_parabola_is_fitted_across_a_change_of_contact_kind(seed):
     # with one kind throughout, the same values give a vertex inside the face, above the end
     same = closest_contact(_synthetic(tca, te))
     assert (np.asarray(same["z"]) < z[-1]).all() and (np.asarray(same["te"]) > -4e-4).all()
+
+
+def test_a_pair_out_of_mesh_leaves_the_contacts_derivatives_finite(seed):
+    """A pair that touches nowhere (every slice TE -inf) has no contact (`gap` inf, `te`
+    0) and does not spoil the reverse-mode derivative of the others' located contacts in the
+    slice positions: finite, and equal to the forward-mode one."""
+    _, tca, _ = seed
+    z = np.asarray(tca.slice_z)
+    te = 1e-3 - 2e-5 * (z - 0.3 * z[-1]) ** 2
+    valid = np.ones(tca.slice_te.shape, bool)
+    valid[:, 0] = False
+    base = _synthetic(tca, te, valid=jnp.asarray(valid), pinion_parameter=jnp.broadcast_to(z, tca.slice_te.shape))
+    contact = closest_contact(base)
+    assert bool(jnp.all(jnp.isinf(contact["gap"][:, 0]))) and float(jnp.max(jnp.abs(contact["te"][:, 0]))) == 0.0
+
+    def located(slice_z):
+        c = closest_contact(eqx.tree_at(lambda t: t.slice_z, base, slice_z))
+        return jnp.sum(jnp.where(jnp.isfinite(c["gap"]), c["z"] + c["u1"], 0.0))
+
+    direction = jnp.asarray(np.linspace(0.5, 1.5, z.size))
+    grad = jax.grad(located)(jnp.asarray(z))
+    assert bool(jnp.all(jnp.isfinite(grad)))
+    np.testing.assert_allclose(jnp.dot(grad, direction), jax.jvp(located, (jnp.asarray(z),), (direction,))[1],
+                               rtol=1e-12)

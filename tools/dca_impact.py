@@ -11,7 +11,8 @@ face slices. One JSON line per accuracy, torque and error, printed as each finis
 (0 convex driving, 1 concave driving) the first contact (pinion angle, axial position, the
 regime), the normal velocity, the local stiffness fit $F = K_s\\delta^n$, the equivalent
 mass, the peak force and approach, and the energy balance $\\tfrac12 m v^2$ against
-$K_s\\delta^{n+1}/(n+1)$; with the compile and run times (s). Every axial pitch error
+$K_s\\delta^{n+1}/(n+1)$; with the run time (s), and for an accuracy's first case
+the compile time apart. Every axial pitch error
 $\\Delta_\\alpha$ (µm, the scene file's `axial_pitch_error_um`) runs in the program of its
 accuracy (the error is a leaf of the scene).
 Results are printed with their codes (`throw=False`): a zone whose gap jumps across zero

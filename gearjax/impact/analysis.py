@@ -190,8 +190,11 @@ def _local_fit(ctx: SearchContext, tca: TCAResult, column, p_arm) -> LocalStiffn
     normal_load = safe_divide(ctx.torque, jnp.abs(p_arm))
     reference = jnp.maximum(normal_load, 10.0 * pair.face_width)
     if isinstance(ctx.model.compliance, ToothSectionCompliance):
-        _, coefficients = point_coefficients(pair, tca, ctx.model.material, ctx.model.compliance.coupling_length)
-        hertz, linear = coefficients[0, column, 0], coefficients[0, column, 1]
+        contact, coefficients = point_coefficients(pair, tca, ctx.model.material,
+                                                   ctx.model.compliance.coupling_length)
+        # unit coefficients where the pair does not touch (no strike found): finite, and flagged
+        touching = jnp.isfinite(contact["gap"][0, column])
+        hertz, linear = (jnp.where(touching, coefficients[0, column, i], 1.0) for i in (0, 1))
         return point_local_stiffness(linear, hertz, reference, acc)
     n_mid = acc.face_slices
     model = ctx.model

@@ -203,12 +203,14 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     a peak near an end is located as one mid-face, and a peak at an end is the end's contact.
     The slice TE is smooth along the face only while the same candidate binds (a tip edge
     taking over from the flank contact is a kink or a step), so where the three slices'
-    contact kinds differ the largest slice is the contact.
+    contact kinds differ, where one of them does not touch, or where the parabola does not
+    open downwards, the largest slice is the contact.
     Returns the nearest slice `slice`, the rigid normal gap `gap` (mm, from the largest of
     the pairs' peaks; `inf` out of mesh), the profile parameters `u1`, `u2`, the axial
-    position `z` (mm), `frac` ($|n_t|$) and the contact normal `normal`, interpolated
-    linearly between the two slices around the peak, the peak TE `te` (rad), and `between`,
-    those slices `(start, other)` and the weight of `other`."""
+    position `z` (mm), `frac` ($|n_t|$) and the contact normal `normal` (renormalised),
+    interpolated linearly between the two slices around the peak, the peak TE `te` (rad;
+    0 out of mesh), and `between`, those slices `(start, other)` and the weight of
+    `other`."""
     n_mid = tca.slice_z.shape[-1] - 2
     order = jnp.asarray([n_mid, *range(n_mid), n_mid + 1])  # the slices along the face
     z_sorted = tca.slice_z[order]
@@ -219,9 +221,10 @@ def closest_contact(tca: TCAResult) -> dict[str, Array]:
     left, here, right = pick(te, centre - 1), pick(te, centre), pick(te, centre + 1)
     kind = kind_index(tca.kind)[..., order]
     same_kind = (pick(kind, centre - 1) == pick(kind, centre)) & (pick(kind, centre + 1) == pick(kind, centre))
-    ok = jnp.isfinite(left) & jnp.isfinite(right) & same_kind
+    ok = jnp.isfinite(left) & jnp.isfinite(here) & jnp.isfinite(right) & same_kind
     nodes = (z_sorted[centre - 1], z_sorted[centre], z_sorted[centre + 1])
-    z, peak, concave = parabola_peak(nodes, (jnp.where(ok, left, 0.0), here, jnp.where(ok, right, 0.0)))
+    # zeros where not fitted (not concave): no infinite value reaches the fit's derivatives
+    z, peak, concave = parabola_peak(nodes, tuple(jnp.where(ok, v, 0.0) for v in (left, here, right)))
     ok = ok & concave
     z = jnp.where(ok, z, z_sorted[best])
     peak = jnp.where(ok, peak, pick(te, best))
@@ -251,8 +254,8 @@ def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length
     and its coefficients there, (pos, pair, 4): the Hertz coefficient $h$ of
     $\\delta = cF + hF^{2/3}$ (mm/N^(2/3)), the linear compliance $c$ (mm/N: both teeth's
     sections and the spreading along the face) and the two principal relative curvatures
-    (1/mm). Pairs out of mesh get finite coefficients of no meaning; `point_contact_analysis`
-    replaces them."""
+    (1/mm). Pairs out of mesh get coefficients of no meaning, not always finite (their
+    slice solves need not have converged); `point_contact_analysis` replaces them."""
     if sections is None:
         sections = (ToothSection.of(pair, 0), ToothSection.of(pair, 1))
     decay_length = coupling_length_mn * pair.normal_module
