@@ -228,3 +228,32 @@ def _implicit_jvp(primals, tangents):
 
 #: The adjoint of every root find of the engine (see `ImplicitAdjoint`).
 ADJOINT = ImplicitAdjoint()
+
+
+def _given_root(inputs):
+    _, root, _ = inputs
+    return root, None
+
+
+def _given_residual(root, _, inputs):
+    residual, _, args = inputs
+    return residual(root, args)
+
+
+def implicit_root(residual, root, args):
+    r"""`root`, a root of `residual(y, args) = 0` found elsewhere, with the derivatives of
+    the implicit function theorem, $\dot y = -(\partial_y F)^{-1}\,\partial_\theta F\,\dot\theta$,
+    of any order (the rule of `ImplicitAdjoint`).
+
+    Lets a solve run on stop-gradient'ed data, so that no derivative traces its iteration,
+    its restarts or the choice between several solves, and gives the chosen root its
+    derivatives once. The value is `root` unchanged.
+
+    Args:
+        residual: `F(y, args)`, a module-level function (a static input); `y` and its value
+            are 1-D arrays of one length.
+        root: the root (its derivatives are discarded).
+        args: the data $\theta$ (a pytree) the derivatives are taken along.
+    """
+    value, _ = _implicit(_given_root, _given_residual, (residual, jax.lax.stop_gradient(root), args))
+    return value

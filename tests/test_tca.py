@@ -218,6 +218,54 @@ def test_base_pitch_deviation_gives_early_edge_contact(seed_pair):
     assert np.all((te[early] > 0) & (te[early] < full))
 
 
+def test_the_kept_contacts_derivatives_are_those_through_its_own_solve(seed_pair):
+    """The TCA solves on stop-gradient'ed data and gives each kept contact the derivatives of
+    its own root (`attach_derivatives`): in the pinion angles and a base pitch deviation they
+    equal the derivatives through that slice's own Newton solve (optimistix's implicit
+    adjoint), for flank and gear-tip-edge contacts alike (the early edge contact of
+    `test_base_pitch_deviation_gives_early_edge_contact`)."""
+    import optimistix as optx
+
+    from gearjax.tca._slice import solve_slice
+    from gearjax.tca._slice_problem import kind_index, make_problem
+    from gearjax.tca.analysis import _lead_correction, on_grid
+    from gearjax.tca.grid import face_slices, positions
+
+    acc = ACC.replace(positions_per_pitch=24)
+    pairs = pair_window(seed_pair)
+    ks = jnp.asarray(pairs)
+    z, _ = face_slices(seed_pair, acc)
+    rtol, atol = acc.newton_tolerances(jnp.float64)
+    data = jnp.append(positions(seed_pair, acc, 1), -0.005)  # pinion angles (rad), f_pb (mm)
+
+    def depth(f_pb):
+        return FlankDepth(errors=MeshErrors(base_pitch_deviation=f_pb))
+
+    def kept(p):
+        r = tooth_contact_analysis(seed_pair, depth(p[-1]), accuracy=acc, pairs=pairs, pinion_angles=p[:-1])
+        offset = jnp.where(r.valid, r.slice_te, 0.0)
+        return jnp.stack([r.pinion_parameter, r.gear_parameter, offset]), (r.valid, kind_index(r.kind))
+
+    def through_solve(p):
+        def one(phi1, k, zz):
+            c = solve_slice(make_problem(seed_pair, depth(p[-1]), k, zz, phi1), optx.Newton(rtol=rtol, atol=atol),
+                            acc.newton_max_steps)
+            offset = jnp.where(c.valid, c.offset + _lead_correction(seed_pair, zz), 0.0)
+            return jnp.stack([c.pinion_parameter, c.gear_parameter, offset])
+
+        return jnp.moveaxis(on_grid(one, p[:-1], ks, z), -1, 0)
+
+    (values, (valid, kind)), jac = jax.jit(lambda p: (kept(p), jax.jacfwd(lambda q: kept(q)[0])(p)))(data)
+    ref_values, ref_jac = jax.jit(lambda p: (through_solve(p), jax.jacfwd(through_solve)(p)))(data)
+    valid, kind = np.asarray(valid), np.asarray(kind)
+    # where both solved the same contact (the fallback, which `solve_slice` lacks, changed none here)
+    same = valid & np.all(np.abs(np.asarray(values) - np.asarray(ref_values)) < 1e-12, axis=0)
+    assert same.sum() == valid.sum() > 0
+    assert set(np.unique(kind[same])) >= {0, 1}  # flank and gear-tip edge contacts
+    jac, ref_jac = np.moveaxis(np.asarray(jac), 0, -2), np.moveaxis(np.asarray(ref_jac), 0, -2)
+    np.testing.assert_allclose(jac[same], ref_jac[same], rtol=1e-9, atol=1e-12)
+
+
 def test_plane_of_action_fast_path_is_second_order_accurate(seed_pair):
     """The fast path's separations exceed the true ones by the second-order effect of the
     relief slope. Near the conjugate point the transverse gap as a function of the pinion

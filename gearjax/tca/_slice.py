@@ -20,25 +20,29 @@ Every solve is `optimistix.root_find(..., Newton)` with the implicit adjoint of
 `gearjax._solution` (no host callback) and the residual at module level and data passed as
 `args`; the analysis solves the candidates whose Newton solve failed again with a damped
 Newton (`gearjax.tca._newton.SafeguardedNewton`); failures are reported (`converged`), never
-thrown.
+thrown. The analysis runs all of it on stop-gradient'ed data and gives the kept contact the
+derivatives of its own root (`attach_derivatives`): the same derivatives as through its
+solve, without tracing the others.
 """
 
 from __future__ import annotations
 
 import functools as ft
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import optimistix as optx
 
 from .._numerics import cross2, safe_norm
-from .._solution import ADJOINT
+from .._solution import ADJOINT, implicit_root
 from ..geometry._base import AbstractFlankPair
 from ._slice_problem import (
     FLANK,
     SliceContact,
     SliceProblem,
     _coincidence_weight,
+    _contact_residual,
     _parameter_tolerance,
     _weighted_residual,
     _within,
@@ -253,6 +257,19 @@ def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceC
         valid=any_ok,
         unconverged=jnp.sum(failed),
     )
+
+
+def attach_derivatives(problem: SliceProblem, contact: SliceContact) -> SliceContact:
+    r"""`contact`, solved on stop-gradient'ed data, with the derivatives of its
+    $(u_1, u_2, \Delta)$ as the root of its own candidate's residual (`_contact_residual`,
+    implicit function theorem: `implicit_root`); no derivative where the slice does not
+    touch. So differentiating a TCA traces one residual per slice, not the three candidates'
+    iterations, the fallback or the choice between them; the values are unchanged."""
+    selector = jax.nn.one_hot(contact.kind, 3, dtype=problem.z.dtype)
+    y = jnp.stack([contact.pinion_parameter, contact.gear_parameter, jnp.where(contact.valid, contact.offset, 0.0)])
+    y = implicit_root(_contact_residual, y, (problem, selector, jax.lax.stop_gradient(y), contact.valid))
+    return eqx.tree_at(lambda c: (c.pinion_parameter, c.gear_parameter, c.offset), contact,
+                       (y[0], y[1], jnp.where(contact.valid, y[2], -jnp.inf)))
 
 
 def solve_slice(problem: SliceProblem, solver: optx.AbstractRootFinder, max_steps: int) -> SliceContact:

@@ -40,7 +40,7 @@ from .._numerics import as_float, rotate2
 from ..accuracy import Accuracy
 from ..geometry._base import AbstractGearPair
 from ..geometry.depth import FlankDepth
-from ._slice import select_contact, solve_again, solve_candidates
+from ._slice import attach_derivatives, select_contact, solve_again, solve_candidates
 from ._slice_problem import FLANK, SliceContact, _contact_residual, contact_kind, make_problem
 from .grid import face_slices, pair_window, positions
 from .peak import explicit_peak_correction, peak_correction
@@ -95,30 +95,50 @@ def tooth_contact_analysis(
     z, width = face_slices(pair, accuracy)
     ks = jnp.asarray(pairs)
 
-    grid = lambda f: jax.vmap(jax.vmap(jax.vmap(f, (None, None, 0)), (None, 0, None)), (0, None, None))  # noqa: E731
     if accuracy.tca_method == "surface":
-        rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
-        steps = accuracy.newton_max_steps
-
-        fallback = SafeguardedNewton(rtol=rtol, atol=atol)
-
-        def one(phi1, k, zz):
-            return solve_candidates(make_problem(pair, depth, k, zz, phi1), optx.Newton(rtol=rtol, atol=atol), steps)
-
-        candidates = _retry_failed(pair, depth, phi, ks, z, grid(one)(phi, ks, z), fallback, fallback_steps(steps))
-        contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, pair))))(*candidates)
+        contact = solve_grid(pair, depth, accuracy, phi, ks, z)
         return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, True)
-    else:
-        if not pair.conjugate_slices:
-            raise ValueError(
-                f"tca_method='plane_of_action' needs an involute family; {type(pair).__name__} "
-                "has no plane of action: use tca_method='surface'"
-            )
+    if not pair.conjugate_slices:
+        raise ValueError(
+            f"tca_method='plane_of_action' needs an involute family; {type(pair).__name__} "
+            "has no plane of action: use tca_method='surface'"
+        )
+    contact = on_grid(lambda phi1, k, zz: _plane_of_action_slice(pair, depth, k, zz, phi1), phi, ks, z)
+    return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, False)
 
-        def one(phi1, k, zz):
-            return _plane_of_action_slice(pair, depth, k, zz, phi1)
 
-    return _assemble(pair, depth, phi, ks, z, width, grid(one)(phi, ks, z), accuracy.face_slices, False)
+def on_grid(f, phi, ks, z, *fields):
+    """`f(phi1, k, z, *fields)` over pinion angles `phi` (pos,), pairs `ks` (pair,) and
+    slices `z` (slice,); `fields` are per slice, with leading axes (pos, pair, slice)."""
+    rest = (0,) * len(fields)
+    f = jax.vmap(f, (None, None, 0, *rest))
+    f = jax.vmap(f, (None, 0, None, *rest))
+    return jax.vmap(f, (0, None, None, *rest))(phi, ks, z, *fields)
+
+
+def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z) -> SliceContact:
+    """The general TCA's first contact of every slice, (pos, pair, slice): the three
+    candidates solved with Newton, the failed ones again with the damped fallback
+    (`_retry_failed`), the first contact kept (`select_contact`), all on stop-gradient'ed
+    data; the kept contact then gets the derivatives of its own root
+    (`attach_derivatives`), so that a derivative of the TCA traces neither the solves nor
+    the choice between them."""
+    rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
+    steps = accuracy.newton_max_steps
+    fixed_pair, fixed_depth, fixed_phi, fixed_z = jax.lax.stop_gradient((pair, depth, phi, z))
+
+    def one(phi1, k, zz):
+        problem = make_problem(fixed_pair, fixed_depth, k, zz, phi1)
+        return solve_candidates(problem, optx.Newton(rtol=rtol, atol=atol), steps)
+
+    candidates = _retry_failed(fixed_pair, fixed_depth, fixed_phi, ks, fixed_z, on_grid(one, fixed_phi, ks, fixed_z),
+                               SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps))
+    contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
+
+    def attach(phi1, k, zz, c):
+        return attach_derivatives(make_problem(pair, depth, k, zz, phi1), c)
+
+    return on_grid(attach, phi, ks, z, contact)
 
 
 #: steps of the fallback solver per Newton step allowed (`Accuracy.newton_max_steps`)

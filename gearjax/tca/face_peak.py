@@ -21,15 +21,16 @@ bracketing search it converges to a local maximum of the stretch; a second peak 
 slice spacing away from the best slice is found only when the slices see it. Each
 evaluation solves its slices as the TCA solves its grid, the damped fallback included
 (`slice_values`), so $g$ at a slice position is the TCA's slice value. All the search's
-evaluations go through one vmapped slice solve inside one loop, so the solve is traced
-once for the search (and once more for the differentiable value at $z^*$).
+evaluations, and the last solve at $z^*$ and its neighbours, go through one vmapped slice
+solve inside one loop, so the solve is traced once.
 
 Derivatives follow the envelope theorem: the search runs on stop-gradient'ed data and
 $g^*$ is evaluated at the found $z^*$, so $\mathrm dg^*/\mathrm d\theta = \partial g/\partial
 \theta\,(z^*)$, exact at a smooth interior maximum or a face end, one-sided at a kink.
 A last round places a smooth interior maximum at the vertex of the parabola through $z^*$
-and its neighbours at $\pm h$ (`_vertex`), and the differentiable evaluation does it once
-more around that point: the search, comparing values, places it only to
+and its neighbours at $\pm h$ (`_vertex`), and the differentiable value does it once more
+around that point, from the loop's last solve there with the derivatives of each contact's
+root (`attach_derivatives`): the search, comparing values, places it only to
 about $\sqrt{\epsilon}$ of the stretch, and what is evaluated there (the strike point,
 its normal and velocity) must move with the maximum as the design changes
 ($\mathrm dz^*/\mathrm d\theta = -g_{z\theta}/g_{zz}$); at a face end or a kink $z^*$ is
@@ -43,14 +44,12 @@ import functools as ft
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 
 from .._custom_types import Array, Scalar
-from ._newton import SafeguardedNewton
 from .._numerics import as_float
-from ._slice import select_contact, solve_candidates
+from ._slice import attach_derivatives
 from ._slice_problem import SliceContact, make_problem
-from .analysis import _lead_correction, _plane_of_action_slice, _retry_failed, contact_point, fallback_steps
+from .analysis import _lead_correction, _plane_of_action_slice, contact_point, solve_grid
 
 #: points per refinement round, the stretch's ends included
 GRID_POINTS = 9
@@ -84,24 +83,20 @@ class FacePeak(eqx.Module):
 def slice_values(pair, depth, accuracy, k, phi1, zs) -> tuple[SliceContact, Array]:
     """The contacts of pair `k`'s slices at the axial positions `zs` (n,) and their values
     $g(z)$ (n,; rad, `-inf` where no candidate touches on the active flanks), solved as the
-    TCA solves its grid: Newton on the three candidates, then the damped fallback on those
-    that failed (`analysis._retry_failed`; without it a flank solve that ran past the tip
-    leaves the edge as the slice's contact, and $g$ jumps by up to 3e-4 rad)."""
+    TCA solves its grid (`analysis.solve_grid`: the damped fallback included, without which
+    a flank solve that ran past the tip leaves the edge as the slice's contact, and $g$
+    jumps by up to 3e-4 rad)."""
     if accuracy.tca_method == "surface":
-        rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi1))
-        steps = accuracy.newton_max_steps
-
-        def one(zz):
-            return solve_candidates(make_problem(pair, depth, k, zz, phi1), optx.Newton(rtol=rtol, atol=atol), steps)
-
-        candidates = jax.tree_util.tree_map(lambda x: x[None, None], jax.vmap(one)(zs))
-        candidates = _retry_failed(pair, depth, phi1[None], k[None], zs, candidates,
-                                   SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps))
-        contact = jax.vmap(ft.partial(select_contact, pair))(*(x[0, 0] for x in candidates))
+        contact = jax.tree_util.tree_map(lambda x: x[0, 0], solve_grid(pair, depth, accuracy, phi1[None], k[None], zs))
     else:
         contact = jax.vmap(lambda zz: _plane_of_action_slice(pair, depth, k, zz, phi1))(zs)
-    return contact, jnp.where(contact.valid, contact.offset + jax.vmap(ft.partial(_lead_correction, pair))(zs),
-                              -jnp.inf)
+    return contact, _values(pair, contact, zs)
+
+
+def _values(pair, contact: SliceContact, zs):
+    """$g(z)$ of slice contacts at `zs` (rad): offset plus the leads' correction, `-inf`
+    where the slice does not touch."""
+    return jnp.where(contact.valid, contact.offset + jax.vmap(ft.partial(_lead_correction, pair))(zs), -jnp.inf)
 
 
 def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FacePeak:
@@ -118,33 +113,41 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
     fractions = jnp.linspace(0.0, 1.0, GRID_POINTS, dtype=z0.dtype)
     step = FD_STEP * spacing
     around = step * jnp.zeros(GRID_POINTS, z0.dtype).at[:3].set(jnp.array([-1.0, 0.0, 1.0], z0.dtype))
+    # One trace of the slice solve serves every round and the shape of the loop's carry.
+    solve = eqx.filter_closure_convert(lambda zs: slice_values(*frozen, accuracy, k, fixed_phi, zs), fractions)
 
     def interior(z):
         return (z - step > -half) & (z + step < half)
 
     def refine(r, state):
-        # rounds 0 .. GRID_ROUNDS - 1 refine the grid; the last one moves a smooth maximum
-        # to its vertex (`_vertex` on z* +- h, the same 9-point solve: one trace)
-        lo, hi, z_best, g_best = state
-        polish = r == GRID_ROUNDS
-        zs = jnp.where(polish, jnp.clip(z_best + around, -half, half), lo + fractions * (hi - lo))
-        contacts, gs = slice_values(frozen[0], frozen[1], accuracy, k, fixed_phi, zs)
+        # rounds 0 .. GRID_ROUNDS - 1 refine the grid; round GRID_ROUNDS moves a smooth
+        # maximum to its vertex (`_vertex` on z* +- h) and the last one solves z* +- h
+        # again there for the differentiable value: the same 9-point solve, one trace
+        lo, hi, z_best, g_best, _ = state
+        polish, last = r == GRID_ROUNDS, r > GRID_ROUNDS
+        zs = jnp.where(polish | last, jnp.clip(z_best + around, -half, half), lo + fractions * (hi - lo))
+        contacts, gs = solve(zs)
         i = jnp.argmax(gs)
         better = gs[i] > g_best
         z_grid, g_grid = jnp.where(better, zs[i], z_best), jnp.where(better, gs[i], g_best)
         first3 = jax.tree_util.tree_map(lambda x: x[:3], contacts)
         shift, g_vertex, _ = _vertex(first3, gs[:3], step, interior(z_best))
-        z_best = jnp.where(polish, z_best + shift, z_grid)
-        g_best = jnp.where(polish, jnp.where(shift != 0.0, g_vertex, g_best), g_grid)
-        return zs[jnp.maximum(i - 1, 0)], zs[jnp.minimum(i + 1, GRID_POINTS - 1)], z_best, g_best
+        z_next = jnp.where(last, z_best, jnp.where(polish, z_best + shift, z_grid))
+        g_next = jnp.where(last, g_best, jnp.where(polish, jnp.where(shift != 0.0, g_vertex, g_best), g_grid))
+        return zs[jnp.maximum(i - 1, 0)], zs[jnp.minimum(i + 1, GRID_POINTS - 1)], z_next, g_next, first3
 
+    blank = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype)[:3], solve.out_struct[0])
     # the best slice competes with the search
-    _, _, z_found, _ = jax.lax.fori_loop(0, GRID_ROUNDS + 1, refine, (lo, hi, z0, g0))
+    _, _, z_found, _, found = jax.lax.fori_loop(0, GRID_ROUNDS + 2, refine, (lo, hi, z0, g0, blank))
     z_star = jax.lax.stop_gradient(z_found)
-    # z* and its neighbours at +-h in one vmapped solve, differentiable: a smooth maximum
-    # moves with the data to the vertex of their parabola (`_vertex`)
+    # z* and its neighbours at +-h (the last round's solve), differentiable: a smooth
+    # maximum moves with the data to the vertex of their parabola (`_vertex`)
     zs = jnp.clip(z_star + step * jnp.array([-1.0, 0.0, 1.0], z_star.dtype), -half, half)
-    contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs)
+    if accuracy.tca_method == "surface":
+        contacts = jax.vmap(lambda zz, c: attach_derivatives(make_problem(pair, depth, k, zz, phi1), c))(zs, found)
+        gs = _values(pair, contacts, zs)
+    else:
+        contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs)
     shift, te, contact = _vertex(contacts, gs, step, interior(z_star))
     x1, x2, n, v12, _ = contact_point(pair, depth, phi1, k, z_star + shift, contact.pinion_parameter,
                                       contact.gear_parameter, jnp.where(jnp.isfinite(te), te, 0.0))
