@@ -221,9 +221,10 @@ def test_base_pitch_deviation_gives_early_edge_contact(seed_pair):
 def test_the_kept_contacts_derivatives_are_those_through_its_own_solve(seed_pair):
     """The TCA solves on stop-gradient'ed data and gives each kept contact the derivatives of
     its own root (`attach_derivatives`): in the pinion angles and a base pitch deviation they
-    equal the derivatives through that slice's own Newton solve (optimistix's implicit
-    adjoint), for flank and gear-tip-edge contacts alike (the early edge contact of
-    `test_base_pitch_deviation_gives_early_edge_contact`)."""
+    equal the derivatives through that slice's own Newton solve (`_solution.ImplicitAdjoint`),
+    for flank and gear-tip-edge contacts alike (the early edge contact of
+    `test_base_pitch_deviation_gives_early_edge_contact`), and reverse mode gives what
+    forward mode gives."""
     import optimistix as optx
 
     from gearjax.tca._slice import solve_slice
@@ -262,6 +263,9 @@ def test_the_kept_contacts_derivatives_are_those_through_its_own_solve(seed_pair
     same = valid & np.all(np.abs(np.asarray(values) - np.asarray(ref_values)) < 1e-12, axis=0)
     assert same.sum() == valid.sum() > 0
     assert set(np.unique(kind[same])) >= {0, 1}  # flank and gear-tip edge contacts
+    weights = np.random.default_rng(0).standard_normal(np.shape(values))
+    grad = jax.jit(jax.grad(lambda p: jnp.sum(weights * kept(p)[0])))(data)
+    np.testing.assert_allclose(grad, np.tensordot(weights, np.asarray(jac), weights.ndim), rtol=1e-9, atol=1e-9)
     jac, ref_jac = np.moveaxis(np.asarray(jac), 0, -2), np.moveaxis(np.asarray(ref_jac), 0, -2)
     np.testing.assert_allclose(jac[same], ref_jac[same], rtol=1e-9, atol=1e-12)
 

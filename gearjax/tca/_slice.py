@@ -263,11 +263,17 @@ def attach_derivatives(problem: SliceProblem, contact: SliceContact) -> SliceCon
     r"""`contact`, solved on stop-gradient'ed data, with the derivatives of its
     $(u_1, u_2, \Delta)$ as the root of its own candidate's residual (`_contact_residual`,
     implicit function theorem: `implicit_root`); no derivative where the slice does not
-    touch. So differentiating a TCA traces one residual per slice, not the three candidates'
-    iterations, the fallback or the choice between them; the values are unchanged."""
+    touch (there the found values are kept, and their derivatives are zero). So
+    differentiating a TCA traces one residual per slice, not the three candidates'
+    iterations, the fallback or the choice between them; the values are unchanged. The
+    residual is unweighted: the rows' weights (`_coincidence_weight`) change no root."""
     selector = jax.nn.one_hot(contact.kind, 3, dtype=problem.z.dtype)
-    y = jnp.stack([contact.pinion_parameter, contact.gear_parameter, jnp.where(contact.valid, contact.offset, 0.0)])
+    found = jnp.stack([contact.pinion_parameter, contact.gear_parameter, jnp.where(contact.valid, contact.offset, 0.0)])
+    # where the slice does not touch, the rule linearises the residual at a finite point
+    # (a failed solve may have left NaN), and the values found are kept
+    y = jnp.where(contact.valid, found, jnp.nan_to_num(found, nan=0.0, posinf=0.0, neginf=0.0))
     y = implicit_root(_contact_residual, y, (problem, selector, jax.lax.stop_gradient(y), contact.valid))
+    y = jnp.where(contact.valid, y, found)
     return eqx.tree_at(lambda c: (c.pinion_parameter, c.gear_parameter, c.offset), contact,
                        (y[0], y[1], jnp.where(contact.valid, y[2], -jnp.inf)))
 

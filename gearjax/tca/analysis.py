@@ -134,6 +134,12 @@ def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z) -> SliceContact:
     candidates = _retry_failed(fixed_pair, fixed_depth, fixed_phi, ks, fixed_z, on_grid(one, fixed_phi, ks, fixed_z),
                                SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps))
     contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
+    return attach_grid(pair, depth, phi, ks, z, contact)
+
+
+def attach_grid(pair, depth, phi, ks, z, contact: SliceContact) -> SliceContact:
+    """`attach_derivatives` over a grid of slice contacts (pos, pair, slice) found on
+    stop-gradient'ed data."""
 
     def attach(phi1, k, zz, c):
         return attach_derivatives(make_problem(pair, depth, k, zz, phi1), c)

@@ -27,7 +27,7 @@ solve inside one loop, so the solve is traced once.
 Derivatives follow the envelope theorem: the search runs on stop-gradient'ed data and
 $g^*$ is evaluated at the found $z^*$, so $\mathrm dg^*/\mathrm d\theta = \partial g/\partial
 \theta\,(z^*)$, exact at a smooth interior maximum or a face end, one-sided at a kink.
-A last round places a smooth interior maximum at the vertex of the parabola through $z^*$
+The polish round places a smooth interior maximum at the vertex of the parabola through $z^*$
 and its neighbours at $\pm h$ (`_vertex`), and the differentiable value does it once more
 around that point, from the loop's last solve there with the derivatives of each contact's
 root (`attach_derivatives`): the search, comparing values, places it only to
@@ -47,9 +47,8 @@ import jax.numpy as jnp
 
 from .._custom_types import Array, Scalar
 from .._numerics import as_float
-from ._slice import attach_derivatives
-from ._slice_problem import SliceContact, make_problem
-from .analysis import _lead_correction, _plane_of_action_slice, contact_point, solve_grid
+from ._slice_problem import SliceContact
+from .analysis import _lead_correction, _plane_of_action_slice, attach_grid, contact_point, solve_grid
 
 #: points per refinement round, the stretch's ends included
 GRID_POINTS = 9
@@ -103,21 +102,23 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
     """Maximise pair `k`'s slice value over `[z_best - spacing, z_best + spacing]` clipped to
     the face (see the module docstring); `z_best`, `te_best` are the best slice's position
     and value, kept where the search finds nothing higher."""
-    half = 0.5 * pair.face_width
+    half, step = 0.5 * pair.face_width, FD_STEP * spacing
     k = as_float(k)
-    fixed_phi, z0, g0 = jax.lax.stop_gradient((phi1, z_best, te_best))
+    # the search sees no derivative at all
+    fixed_phi, z0, g0, fixed_half, fixed_step, fixed_spacing = jax.lax.stop_gradient(
+        (phi1, z_best, te_best, half, step, spacing))
     frozen = jax.lax.stop_gradient((pair, depth))
+    surface = accuracy.tca_method == "surface"
 
-    lo = jnp.clip(z0 - spacing, -half, half)
-    hi = jnp.clip(z0 + spacing, -half, half)
+    lo = jnp.clip(z0 - fixed_spacing, -fixed_half, fixed_half)
+    hi = jnp.clip(z0 + fixed_spacing, -fixed_half, fixed_half)
     fractions = jnp.linspace(0.0, 1.0, GRID_POINTS, dtype=z0.dtype)
-    step = FD_STEP * spacing
-    around = step * jnp.zeros(GRID_POINTS, z0.dtype).at[:3].set(jnp.array([-1.0, 0.0, 1.0], z0.dtype))
+    around = fixed_step * jnp.zeros(GRID_POINTS, z0.dtype).at[:3].set(jnp.array([-1.0, 0.0, 1.0], z0.dtype))
     # One trace of the slice solve serves every round and the shape of the loop's carry.
     solve = eqx.filter_closure_convert(lambda zs: slice_values(*frozen, accuracy, k, fixed_phi, zs), fractions)
 
     def interior(z):
-        return (z - step > -half) & (z + step < half)
+        return (z - fixed_step > -fixed_half) & (z + fixed_step < fixed_half)
 
     def refine(r, state):
         # rounds 0 .. GRID_ROUNDS - 1 refine the grid; round GRID_ROUNDS moves a smooth
@@ -125,26 +126,28 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
         # again there for the differentiable value: the same 9-point solve, one trace
         lo, hi, z_best, g_best, _ = state
         polish, last = r == GRID_ROUNDS, r > GRID_ROUNDS
-        zs = jnp.where(polish | last, jnp.clip(z_best + around, -half, half), lo + fractions * (hi - lo))
+        zs = jnp.where(polish | last, jnp.clip(z_best + around, -fixed_half, fixed_half), lo + fractions * (hi - lo))
         contacts, gs = solve(zs)
         i = jnp.argmax(gs)
         better = gs[i] > g_best
         z_grid, g_grid = jnp.where(better, zs[i], z_best), jnp.where(better, gs[i], g_best)
         first3 = jax.tree_util.tree_map(lambda x: x[:3], contacts)
-        shift, g_vertex, _ = _vertex(first3, gs[:3], step, interior(z_best))
+        shift, g_vertex, _ = _vertex(first3, gs[:3], fixed_step, interior(z_best))
         z_next = jnp.where(last, z_best, jnp.where(polish, z_best + shift, z_grid))
         g_next = jnp.where(last, g_best, jnp.where(polish, jnp.where(shift != 0.0, g_vertex, g_best), g_grid))
         return zs[jnp.maximum(i - 1, 0)], zs[jnp.minimum(i + 1, GRID_POINTS - 1)], z_next, g_next, first3
 
-    blank = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype)[:3], solve.out_struct[0])
-    # the best slice competes with the search
-    _, _, z_found, _, found = jax.lax.fori_loop(0, GRID_ROUNDS + 2, refine, (lo, hi, z0, g0, blank))
+    blank = jax.tree_util.tree_map(lambda x: jnp.zeros((3, *x.shape[1:]), x.dtype), solve.out_struct[0])
+    # the best slice competes with the search; the last round only where its solve is used
+    rounds = GRID_ROUNDS + 1 + int(surface)
+    _, _, z_found, _, found = jax.lax.fori_loop(0, rounds, refine, (lo, hi, z0, g0, blank))
     z_star = jax.lax.stop_gradient(z_found)
     # z* and its neighbours at +-h (the last round's solve), differentiable: a smooth
     # maximum moves with the data to the vertex of their parabola (`_vertex`)
     zs = jnp.clip(z_star + step * jnp.array([-1.0, 0.0, 1.0], z_star.dtype), -half, half)
-    if accuracy.tca_method == "surface":
-        contacts = jax.vmap(lambda zz, c: attach_derivatives(make_problem(pair, depth, k, zz, phi1), c))(zs, found)
+    if surface:
+        contacts = jax.tree_util.tree_map(lambda x: x[0, 0], attach_grid(
+            pair, depth, phi1[None], k[None], zs, jax.tree_util.tree_map(lambda x: x[None, None], found)))
         gs = _values(pair, contacts, zs)
     else:
         contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs)
