@@ -87,6 +87,7 @@ def test_bad_input(call, match):
 
 
 # ---------------------------------------------------------------- rack, surfaces, four states
+import equinox as eqx
 import jax
 import numpy as np
 import optimistix as optx
@@ -143,6 +144,43 @@ def test_zones_lie_q_TA_apart_along_the_face():
     shift = -a0 * float(SEED_PAIR.pitch_radius[0]) / math.tan(math.radians(15.0))
     facts = axial_meshing(4.0, 15.0, 55.0)
     assert shift == pytest.approx(float(facts.convex_to_concave), abs=0.1)
+
+
+@pytest.mark.parametrize("zone", [0, 1])
+def test_a_zone_given_by_an_array_index_is_the_zone_given_by_its_int(zone):
+    """`contact_zone` with an integer array (as `vmap` over the zones passes it) selects
+    every zone-dependent quantity of the zone given by a Python int, exactly."""
+    fixed, traced = SEED_PAIR.contact_zone(zone), SEED_PAIR.contact_zone(jnp.asarray(zone))
+    for gear in (0, 1):
+        for name in ("profile_limits", "parameter_domain"):
+            assert jnp.array_equal(jnp.stack(getattr(fixed, name)(gear)), jnp.stack(getattr(traced, name)(gear))), name
+        u = jnp.linspace(*fixed.profile_limits(gear), 7)
+        assert jnp.all(jnp.isfinite(fixed.profile(gear, u)))
+        assert jnp.array_equal(fixed.profile(gear, u), traced.profile(gear, u))
+        assert jnp.array_equal(fixed.parameter_at_radius(gear, 50.0), traced.parameter_at_radius(gear, 50.0))
+    assert jnp.array_equal(fixed.contact_instant(), traced.contact_instant())
+    assert jnp.array_equal(jnp.stack(fixed.contact_guess(0.01)), jnp.stack(traced.contact_guess(0.01)))
+
+
+def test_both_zones_in_one_analysis_are_each_zones_own():
+    """Given the window, the TCA analyses both zones in one `vmap` over the zone index: the
+    merged result of each zone analysed alone, to the solves' rounding."""
+    from gearjax import Accuracy
+    from gearjax.tca import pair_window, tooth_contact_analysis
+    from gearjax.tca.result import merge_zones
+
+    acc = Accuracy(positions_per_pitch=8, face_slices=5)
+    window = pair_window(SEED_PAIR)
+    together = eqx.filter_jit(tooth_contact_analysis)(SEED_PAIR, accuracy=acc, pairs=window)
+    alone = merge_zones([eqx.filter_jit(tooth_contact_analysis)(z, accuracy=acc, pairs=window)
+                         for z in SEED_PAIR.contact_zones()])
+    assert np.array_equal(np.asarray(together.valid), np.asarray(alone.valid)) and np.asarray(alone.valid).any()
+    assert np.array_equal(np.asarray(together.pair_zone), np.asarray(alone.pair_zone))
+    np.testing.assert_allclose(together.transmission_error, alone.transmission_error, rtol=0, atol=1e-14)
+    valid = np.asarray(alone.valid)
+    for name in ("slice_te", "pinion_parameter", "gear_parameter"):
+        np.testing.assert_allclose(np.asarray(getattr(together, name))[valid], np.asarray(getattr(alone, name))[valid],
+                                   rtol=1e-11, atol=1e-13, err_msg=name)
 
 
 def test_slice_contact_of_the_convex_zone():

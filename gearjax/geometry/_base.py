@@ -143,7 +143,8 @@ class AbstractGearPair(eqx.Module):
     @abc.abstractmethod
     def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
         """The pair's zones of simultaneous contact, one flank pair each, in the order of
-        `TCAResult.pair_zone`; `(self,)` for single-zone families."""
+        `TCAResult.pair_zone`; `(self,)` for single-zone families. A family with several
+        also gives `contact_zone(index)` for an integer array `index` (`vmap`: one trace)."""
 
     @property
     @abc.abstractmethod

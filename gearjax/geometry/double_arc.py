@@ -44,7 +44,7 @@ from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
 from ._base import AbstractGearPair, SceneFileSpec, derived, resolve_derived
-from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, generated_point
+from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, by_arc, generated_point
 from .double_arc_zone import DoubleArcZone
 
 ZONE_NAMES = ("convex driving tooth", "concave driving tooth")
@@ -175,12 +175,17 @@ class DoubleArcGearPair(AbstractGearPair):
             "axial_pitch_error_um": self.axial_pitch_error * 1e3,
         }
 
+    def contact_zone(self, index) -> DoubleArcZone:
+        """Contact zone `index` (0 convex driving, 1 concave driving; a traced index
+        analyses both zones in one `vmap`, `by_arc`)."""
+        return DoubleArcZone(self, index)
+
     # ------------------------------------------------------------------ rack arcs
     def _arc_data(self, arc: int):
         m = self.normal_module
         r = self.rack
-        centre = r.convex_centre if arc == CONVEX else r.concave_centre
-        radius = r.convex_radius if arc == CONVEX else r.concave_radius
+        centre = by_arc(arc, r.convex_centre, r.concave_centre)
+        radius = by_arc(arc, r.convex_radius, r.concave_radius)
         return (m * centre[0], m * centre[1]), m * radius
 
     def _theta(self, arc: int, u):
@@ -188,11 +193,11 @@ class DoubleArcGearPair(AbstractGearPair):
         $u = m_n\\rho_a t$ with $\\theta = \\pi - t$, the concave $u = -m_n\\rho_f t$ with
         $\\theta = -t$ ($u$ grows towards the tip on both)."""
         _, radius = self._arc_data(arc)
-        return jnp.pi - u / radius if arc == CONVEX else u / radius
+        return by_arc(arc, jnp.pi - u / radius, u / radius)
 
     def _u(self, arc: int, t):
         _, radius = self._arc_data(arc)
-        return radius * t if arc == CONVEX else -radius * t
+        return by_arc(arc, radius * t, -radius * t)
 
     def _generate(self, gear: int, arc: int, u):
         centre, radius = self._arc_data(arc)
@@ -210,14 +215,14 @@ class DoubleArcGearPair(AbstractGearPair):
         """Working part of `arc` (mm of $u$): convex $t \\in [\\delta_1, t_\\text{tip}]$;
         concave from the root junction $G$ to $F_1$ (the edge with the transition arc)."""
         r = self.rack
-        if arc == CONVEX:
-            return self._u(CONVEX, math.radians(r.convex_process_angle_deg)), self._u(CONVEX, r.tip_angle)
-        return self._u(CONCAVE, r.root_junction_angle), self._u(CONCAVE, math.radians(r.concave_process_angle_deg))
+        convex = self._u(CONVEX, math.radians(r.convex_process_angle_deg)), self._u(CONVEX, r.tip_angle)
+        concave = self._u(CONCAVE, r.root_junction_angle), self._u(CONCAVE, math.radians(r.concave_process_angle_deg))
+        return by_arc(arc, convex, concave)
 
     def arc_domain(self, arc: int) -> tuple[Scalar, Scalar]:
         """$t \\in [0.03, 1.3]$ rad on `arc` (its smooth continuation), as a range of $u$ (mm)."""
         lo, hi = self._u(arc, 0.03), self._u(arc, 1.3)
-        return (lo, hi) if arc == CONVEX else (hi, lo)
+        return by_arc(arc, (lo, hi), (hi, lo))
 
     def pitch_point(self, arc: int) -> Scalar:
         """$\\xi_I$ (mm) at the rack contact point of `arc`."""

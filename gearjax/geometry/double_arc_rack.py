@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -42,6 +43,15 @@ from .._custom_types import Array
 from .._numerics import rotate2
 
 CONVEX, CONCAVE = 0, 1
+
+
+def by_arc(arc, convex, concave):
+    """`convex` or `concave` (pytrees of one structure) for the arc index `arc`: chosen in
+    Python for an int, selected elementwise for an array (a traced zone index: both contact
+    zones of a pair analysed in one `vmap`)."""
+    if isinstance(arc, int):
+        return convex if arc == CONVEX else concave
+    return jax.tree_util.tree_map(lambda a, b: jnp.where(arc == CONVEX, a, b), convex, concave)
 
 
 def _dms(degrees: int, minutes: int, seconds: int) -> float:

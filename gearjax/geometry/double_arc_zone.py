@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, ClassVar
 
-import equinox as eqx
 import jax.numpy as jnp
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
@@ -20,7 +19,7 @@ from ._base import (
     generic_slice_point_tangent,
     generic_transverse_normal_fraction,
 )
-from .double_arc_rack import CONCAVE, CONVEX
+from .double_arc_rack import CONCAVE, CONVEX, by_arc
 
 if TYPE_CHECKING:
     from .double_arc import DoubleArcGearPair
@@ -32,11 +31,12 @@ class DoubleArcZone(AbstractFlankPair):
 
     Attributes:
         gears: the pair.
-        zone: 0 or 1 (static).
+        zone: 0 or 1; an integer array under `vmap` over the zones
+            (`DoubleArcGearPair.contact_zone`).
     """
 
     gears: DoubleArcGearPair
-    zone: int = eqx.field(static=True)
+    zone: int | Array
 
     #: Not conjugate: no plane-of-action fast path; edges are screened by the window only.
     conjugate_slices: ClassVar[bool] = False
@@ -52,7 +52,7 @@ class DoubleArcZone(AbstractFlankPair):
     contact_window: ClassVar[float] = 0.1
 
     def __check_init__(self):
-        if self.zone not in (CONVEX, CONCAVE):
+        if isinstance(self.zone, int) and self.zone not in (CONVEX, CONCAVE):
             raise ValueError(f"zone must be 0 (convex driving) or 1 (concave driving); got {self.zone!r}")
 
     @property
@@ -132,9 +132,8 @@ class DoubleArcZone(AbstractFlankPair):
         $(\\xi_{I,f} - \\xi_{I,a})/R_1$ for the concave one (the pitch-line points of the two
         contact normals differ, which is why the zones lie $q_{TA}$ apart along the face)."""
         gears = self.gears
-        if self.arc(0) == CONVEX:
-            return jnp.zeros_like(gears.normal_module)
-        return (gears.pitch_point(CONCAVE) - gears.pitch_point(CONVEX)) / gears.pitch_radius[..., 0]
+        concave = (gears.pitch_point(CONCAVE) - gears.pitch_point(CONVEX)) / gears.pitch_radius[..., 0]
+        return by_arc(self.arc(0), jnp.zeros_like(gears.normal_module), concave)
 
     def contact_guess(self, angle: ArrayLike) -> tuple[Scalar, Scalar]:
         """The rack contact points ($t = \\alpha$) within `contact_window` of the zone's
@@ -157,6 +156,6 @@ class DoubleArcZone(AbstractFlankPair):
         arc = self.arc(gear)
         centre, rho = gears._arc_data(arc)
         s = jnp.clip((as_float(radius) - gears.pitch_radius[..., gear] - centre[1]) / rho, -0.999, 0.999)
-        t = jnp.arcsin(s) if arc == CONVEX else -jnp.arcsin(s)
+        t = by_arc(arc, jnp.arcsin(s), -jnp.arcsin(s))
         lo, hi = self.parameter_domain(gear)
         return jnp.clip(gears._u(arc, t), lo, hi)

@@ -59,8 +59,9 @@ def tooth_contact_analysis(
     """Unloaded TCA of `pair` over `pitches` angular pitches of the pinion.
 
     Args:
-        pair: the gear pair (any tooth family; several contact zones are analysed one by
-            one and merged, `merge_zones`).
+        pair: the gear pair (any tooth family; several contact zones are analysed in one
+            `vmap` over the zone index, or one by one where `pairs` is not given, and
+            merged, `merge_zones`).
         depth: modifications and errors (`FlankDepth`); None for perfect flanks.
         accuracy: discretisation and solver settings (static).
         pairs: the tooth-pair window (static); derived from the geometry if omitted
@@ -75,12 +76,16 @@ def tooth_contact_analysis(
     zones = pair.contact_zones()
     if len(zones) > 1:
         # Families with several contact zones per tooth (double circular arc: convex and
-        # concave driving tooth): one analysis per zone, merged along the pair axis.
-        results = [
-            tooth_contact_analysis(zone, depth, accuracy=accuracy, pairs=pairs, pitches=pitches, pinion_angles=pinion_angles)
-            for zone in zones
-        ]
-        return merge_zones(results)
+        # concave driving tooth): one analysis per zone, merged along the pair axis; with
+        # a given window, all zones in one `vmap` over the zone index (one trace).
+        def zone(index):
+            return tooth_contact_analysis(pair.contact_zone(index), depth, accuracy=accuracy, pairs=pairs,
+                                          pitches=pitches, pinion_angles=pinion_angles)
+
+        if pairs is None:  # each zone's own window (`pair_window` needs concrete zones)
+            return merge_zones([zone(index) for index in range(len(zones))])
+        results = jax.vmap(zone)(jnp.arange(len(zones)))
+        return merge_zones([jax.tree_util.tree_map(lambda x: x[i], results) for i in range(len(zones))])
     pair = zones[0].resolve()
     depth = FlankDepth() if depth is None else depth
     if pinion_angles is not None:
