@@ -23,7 +23,8 @@ dedendum ("convex driving tooth", zone 0) and its concave dedendum with the gear
 addendum ("concave driving tooth", zone 1), $q_{TA}$ apart along the face (formula 27).
 `DoubleArcGearPair.contact_zones()` gives one `DoubleArcZone` flank pair per zone
 (`double_arc_zone.py`); the
-general TCA runs on each and merges them (`gearjax.tca.merge_zones`).
+general TCA runs on both in one `vmap` over the zone index and merges them
+(`gearjax.tca.merge_zones`).
 
 **Axial pitch error** $\Delta_\alpha = t_1 - t_2$ (seed's section 2.1): the gear's lead is made
 with axial pitch $t_2 = P_x - \Delta_\alpha$ (pinion nominal), transverse profiles unchanged.
@@ -181,37 +182,37 @@ class DoubleArcGearPair(AbstractGearPair):
         return DoubleArcZone(self, index)
 
     # ------------------------------------------------------------------ rack arcs
-    def _arc_data(self, arc: int):
+    def _arc_data(self, arc: int | Array):
         m = self.normal_module
         r = self.rack
         centre = by_arc(arc, r.convex_centre, r.concave_centre)
         radius = by_arc(arc, r.convex_radius, r.concave_radius)
         return (m * centre[0], m * centre[1]), m * radius
 
-    def _theta(self, arc: int, u):
+    def _theta(self, arc: int | Array, u):
         """Polar angle on the rack arc of profile parameter u (mm): the convex arc has
         $u = m_n\\rho_a t$ with $\\theta = \\pi - t$, the concave $u = -m_n\\rho_f t$ with
         $\\theta = -t$ ($u$ grows towards the tip on both)."""
         _, radius = self._arc_data(arc)
         return by_arc(arc, jnp.pi - u / radius, u / radius)
 
-    def _u(self, arc: int, t):
+    def _u(self, arc: int | Array, t):
         _, radius = self._arc_data(arc)
         return by_arc(arc, radius * t, -radius * t)
 
-    def _generate(self, gear: int, arc: int, u):
+    def _generate(self, gear: int, arc: int | Array, u):
         centre, radius = self._arc_data(arc)
         return generated_point(centre, radius, self._theta(arc, as_float(u)), self.pitch_radius[..., gear], self.helix_angle)
 
-    def arc_point(self, gear: int, arc: int, u: ArrayLike) -> Float[Array, "2"]:
+    def arc_point(self, gear: int, arc: int | Array, u: ArrayLike) -> Float[Array, "2"]:
         """Transverse profile point of the convex (0) or concave (1) arc of `gear` (mm)."""
         return self._generate(gear, arc, u)[0]
 
-    def contact_parameter(self, arc: int) -> Scalar:
+    def contact_parameter(self, arc: int | Array) -> Scalar:
         """$u$ of the rack contact point ($t = \\alpha$) on `arc` (mm)."""
         return self._u(arc, self.rack.alpha)
 
-    def arc_limits(self, arc: int) -> tuple[Scalar, Scalar]:
+    def arc_limits(self, arc: int | Array) -> tuple[Scalar, Scalar]:
         """Working part of `arc` (mm of $u$): convex $t \\in [\\delta_1, t_\\text{tip}]$;
         concave from the root junction $G$ to $F_1$ (the edge with the transition arc)."""
         r = self.rack
@@ -219,12 +220,12 @@ class DoubleArcGearPair(AbstractGearPair):
         concave = self._u(CONCAVE, r.root_junction_angle), self._u(CONCAVE, math.radians(r.concave_process_angle_deg))
         return by_arc(arc, convex, concave)
 
-    def arc_domain(self, arc: int) -> tuple[Scalar, Scalar]:
+    def arc_domain(self, arc: int | Array) -> tuple[Scalar, Scalar]:
         """$t \\in [0.03, 1.3]$ rad on `arc` (its smooth continuation), as a range of $u$ (mm)."""
         lo, hi = self._u(arc, 0.03), self._u(arc, 1.3)
         return by_arc(arc, (lo, hi), (hi, lo))
 
-    def pitch_point(self, arc: int) -> Scalar:
+    def pitch_point(self, arc: int | Array) -> Scalar:
         """$\\xi_I$ (mm) at the rack contact point of `arc`."""
         centre, radius = self._arc_data(arc)
         theta = self._theta(arc, self.contact_parameter(arc))

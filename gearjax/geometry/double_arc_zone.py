@@ -8,9 +8,11 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, ClassVar
 
 import jax.numpy as jnp
+import numpy as np
 
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float
+from .._validate import is_concrete
 from ._base import (
     AbstractFlankPair,
     generic_profile_normal,
@@ -52,7 +54,7 @@ class DoubleArcZone(AbstractFlankPair):
     contact_window: ClassVar[float] = 0.1
 
     def __check_init__(self):
-        if isinstance(self.zone, int) and self.zone not in (CONVEX, CONCAVE):
+        if is_concrete(self.zone) and not np.isin(np.asarray(self.zone), (CONVEX, CONCAVE)).all():
             raise ValueError(f"zone must be 0 (convex driving) or 1 (concave driving); got {self.zone!r}")
 
     @property
@@ -100,7 +102,7 @@ class DoubleArcZone(AbstractFlankPair):
     def geometry_report(self) -> dict[str, ArrayLike]:
         return self.gears.geometry_report()
 
-    def arc(self, gear: int) -> int:
+    def arc(self, gear: int) -> int | Array:
         """Working arc of `gear` in this zone: CONVEX (0) or CONCAVE (1)."""
         return self.zone if gear == 0 else 1 - self.zone
 

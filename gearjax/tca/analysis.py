@@ -74,19 +74,25 @@ def tooth_contact_analysis(
         `TCAResult`.
     """
     zones = pair.contact_zones()
-    if len(zones) > 1:
-        # Families with several contact zones per tooth (double circular arc: convex and
-        # concave driving tooth): one analysis per zone, merged along the pair axis; with
-        # a given window, all zones in one `vmap` over the zone index (one trace).
-        def zone(index):
-            return tooth_contact_analysis(pair.contact_zone(index), depth, accuracy=accuracy, pairs=pairs,
-                                          pitches=pitches, pinion_angles=pinion_angles)
+    if len(zones) == 1:
+        return _zone_analysis(zones[0], depth, accuracy, pairs, pitches, pinion_angles)
+    # Families with several contact zones per tooth (double circular arc: convex and concave
+    # driving tooth): one analysis per zone, merged along the pair axis; with a given
+    # window, all zones in one `vmap` over the zone index (one trace).
+    if pairs is None or not hasattr(pair, "contact_zone"):  # `pair_window` needs concrete zones
+        return merge_zones([_zone_analysis(zone, depth, accuracy, pairs, pitches, pinion_angles) for zone in zones])
 
-        if pairs is None:  # each zone's own window (`pair_window` needs concrete zones)
-            return merge_zones([zone(index) for index in range(len(zones))])
-        results = jax.vmap(zone)(jnp.arange(len(zones)))
-        return merge_zones([jax.tree_util.tree_map(lambda x: x[i], results) for i in range(len(zones))])
-    pair = zones[0].resolve()
+    def zone(index):
+        return _zone_analysis(pair.contact_zone(index), depth, accuracy, pairs, pitches, pinion_angles, "zone")
+
+    results = jax.vmap(zone, axis_name="zone")(jnp.arange(len(zones)))
+    return merge_zones([jax.tree_util.tree_map(lambda x: x[i], results) for i in range(len(zones))])
+
+
+def _zone_analysis(pair, depth, accuracy, pairs, pitches, pinion_angles, zone_axis=None) -> TCAResult:
+    """`tooth_contact_analysis` of one contact zone; `zone_axis` names the `vmap` axis
+    over the zones, if any (the fallback then runs for all of them or none)."""
+    pair = pair.resolve()
     depth = FlankDepth() if depth is None else depth
     if pinion_angles is not None:
         phi = as_float(pinion_angles)
@@ -101,7 +107,7 @@ def tooth_contact_analysis(
     ks = jnp.asarray(pairs)
 
     if accuracy.tca_method == "surface":
-        contact = solve_grid(pair, depth, accuracy, phi, ks, z)
+        contact = solve_grid(pair, depth, accuracy, phi, ks, z, zone_axis)
         return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, True)
     if not pair.conjugate_slices:
         raise ValueError(
@@ -121,13 +127,13 @@ def on_grid(f, phi, ks, z, *fields):
     return jax.vmap(f, (0, None, None, *rest))(phi, ks, z, *fields)
 
 
-def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z) -> SliceContact:
+def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None) -> SliceContact:
     """The general TCA's first contact of every slice, (pos, pair, slice): the three
     candidates solved with Newton, the failed ones again with the damped fallback
     (`_retry_failed`), the first contact kept (`select_contact`), all on stop-gradient'ed
     data; the kept contact then gets the derivatives of its own root
     (`attach_derivatives`), so that a derivative of the TCA traces neither the solves nor
-    the choice between them."""
+    the choice between them. `zone_axis`: as in `_retry_failed`."""
     rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
     steps = accuracy.newton_max_steps
     fixed_pair, fixed_depth, fixed_phi, fixed_z = jax.lax.stop_gradient((pair, depth, phi, z))
@@ -137,7 +143,7 @@ def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z) -> SliceContact:
         return solve_candidates(problem, optx.Newton(rtol=rtol, atol=atol), steps)
 
     candidates = _retry_failed(fixed_pair, fixed_depth, fixed_phi, ks, fixed_z, on_grid(one, fixed_phi, ks, fixed_z),
-                               SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps))
+                               SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps), zone_axis)
     contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
     return attach_grid(pair, depth, phi, ks, z, contact)
 
@@ -177,7 +183,7 @@ def fallback_capacity(candidates: int) -> int:
     return min(candidates, max(32, candidates // 16))
 
 
-def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
+def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps, zone_axis=None):
     """Solve the failed candidates of a (positions, pairs, slices, 3) grid again with
     `solver` (`SafeguardedNewton`): plain Newton can cycle where a relief's curvature jumps
     inside the contact's reach (6 of 400 random 29/71 designs missed loaded
@@ -190,7 +196,9 @@ def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
     solve that an edge contact proved to have missed an interior contact (`solve_again`)
     starts from that edge contact; such misses are many on designs with deep reliefs (121
     slices of one cycle on random 29/71 design 0), hence one in 16, not 64 as for the
-    Newton cycles alone."""
+    Newton cycles alone. Under a `vmap` over contact zones named `zone_axis` the condition
+    counts the failures of all zones, so it stays unbatched: the fallback runs for every
+    zone or for none."""
     shape = candidates[2].shape
 
     def retry(candidates):
@@ -213,7 +221,10 @@ def _retry_failed(pair, depth, phi, ks, z, candidates, solver, max_steps):
 
     # A grid without failures (nearly every one) skips the fallback; under `vmap` the
     # condition is batched and both branches run, as without it.
-    return jax.lax.cond(jnp.any(candidates[2]), retry, lambda candidates: candidates, candidates)
+    failures = jnp.sum(candidates[2])
+    if zone_axis is not None:
+        failures = jax.lax.psum(failures, zone_axis)
+    return jax.lax.cond(failures > 0, retry, lambda candidates: candidates, candidates)
 
 
 def _plane_of_action_slice(pair, depth, k, z, phi1) -> SliceContact:
