@@ -112,7 +112,10 @@ def evaluate(ctx: SearchContext, column, phi1):
     around the best slice $j$; for point-contact flanks `point_peak`, where the loaded
     contact puts it): `(te, lte, tca, peak), (j, solved)`."""
     acc = ctx.model.accuracy
-    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None])
+    # Only the loaded TE is used from the TCA's TE, and it does not depend on the reference
+    # the separations count from: no refinement of the TE between slices.
+    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None],
+                                 refine_peak=False)
     active = jnp.arange(tca.pair_index.shape[0]) != column
     ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)

@@ -55,6 +55,7 @@ def tooth_contact_analysis(
     pairs: tuple[int, ...] | None = None,
     pitches: int = 1,
     pinion_angles: Float[Array, " pos"] | None = None,
+    refine_peak: bool = True,
 ) -> TCAResult:
     """Unloaded TCA of `pair` over `pitches` angular pitches of the pinion.
 
@@ -69,27 +70,34 @@ def tooth_contact_analysis(
         pitches: number of angular pitches covered by the positions.
         pinion_angles: evaluate at these pinion angles (rad) instead of the cycle grid
             (e.g. to differentiate with respect to the pinion angle).
+        refine_peak: refine each pair's largest midpoint value to its peak between the
+            slices (`tca.peak`; with at least 3 slices). False keeps the largest slice
+            value: a smaller program for callers that use only differences to the TE,
+            such as the loaded TE (the LTCA's separations and its rotation count from the
+            same TE, so the loaded TE does not depend on it).
 
     Returns:
         `TCAResult`.
     """
     zones = pair.contact_zones()
     if len(zones) == 1:
-        return _zone_analysis(zones[0], depth, accuracy, pairs, pitches, pinion_angles)
+        return _zone_analysis(zones[0], depth, accuracy, pairs, pitches, pinion_angles, refine_peak)
     # Families with several contact zones per tooth (double circular arc: convex and concave
     # driving tooth): one analysis per zone, merged along the pair axis; with a given
     # window, all zones in one `vmap` over the zone index (one trace).
     if pairs is None or not hasattr(pair, "contact_zone"):  # `pair_window` needs concrete zones
-        return merge_zones([_zone_analysis(zone, depth, accuracy, pairs, pitches, pinion_angles) for zone in zones])
+        return merge_zones([_zone_analysis(zone, depth, accuracy, pairs, pitches, pinion_angles, refine_peak)
+                            for zone in zones])
 
     def zone(index):
-        return _zone_analysis(pair.contact_zone(index), depth, accuracy, pairs, pitches, pinion_angles, "zone")
+        return _zone_analysis(pair.contact_zone(index), depth, accuracy, pairs, pitches, pinion_angles, refine_peak,
+                              "zone")
 
     results = jax.vmap(zone, axis_name="zone")(jnp.arange(len(zones)))
     return merge_zones([jax.tree_util.tree_map(lambda x: x[i], results) for i in range(len(zones))])
 
 
-def _zone_analysis(pair, depth, accuracy, pairs, pitches, pinion_angles, zone_axis=None) -> TCAResult:
+def _zone_analysis(pair, depth, accuracy, pairs, pitches, pinion_angles, refine_peak, zone_axis=None) -> TCAResult:
     """`tooth_contact_analysis` of one contact zone; `zone_axis` names the `vmap` axis
     over the zones, if any (the fallback then runs for all of them or none)."""
     pair = pair.resolve()
@@ -108,14 +116,14 @@ def _zone_analysis(pair, depth, accuracy, pairs, pitches, pinion_angles, zone_ax
 
     if accuracy.tca_method == "surface":
         contact = solve_grid(pair, depth, accuracy, phi, ks, z, zone_axis)
-        return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, True)
+        return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, True, refine_peak)
     if not pair.conjugate_slices:
         raise ValueError(
             f"tca_method='plane_of_action' needs an involute family; {type(pair).__name__} "
             "has no plane of action: use tca_method='surface'"
         )
     contact = on_grid(lambda phi1, k, zz: _plane_of_action_slice(pair, depth, k, zz, phi1), phi, ks, z)
-    return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, False)
+    return _assemble(pair, depth, phi, ks, z, width, contact, accuracy.face_slices, False, refine_peak)
 
 
 def on_grid(f, phi, ks, z, *fields):
@@ -292,13 +300,13 @@ def _peak_rise(pair, depth, phi, ks, z, contact: SliceContact, best, found, n_mi
     )
 
 
-def _binding_te(pair, depth, phi, ks, z, contact: SliceContact, slice_te, n_mid: int, surface: bool):
+def _binding_te(pair, depth, phi, ks, z, contact: SliceContact, slice_te, n_mid: int, surface: bool, refine: bool):
     """TE per position: the largest slice value over pairs, midpoints (refined between
-    slices when there are at least 3) and face ends."""
+    slices when `refine` and there are at least 3) and face ends."""
     valid = contact.valid
     masked = jnp.where(valid[..., :n_mid], slice_te[..., :n_mid], -jnp.inf)
     mid = jnp.max(masked, axis=-1)  # (pos, pair)
-    if n_mid >= 3:
+    if refine and n_mid >= 3:
         found = jnp.isfinite(mid)
         rise = _peak_rise(pair, depth, phi, ks, z, contact, jnp.argmax(masked, axis=-1), found, n_mid, surface)
         mid = mid + jnp.where(found, rise, 0.0)
@@ -344,10 +352,11 @@ def _contact_geometry(pair, depth, phi, ks, z, contact: SliceContact, slice_te):
     )(phi, as_float(ks), z, contact.pinion_parameter, contact.gear_parameter, slice_te)
 
 
-def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int, surface: bool) -> TCAResult:
+def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int, surface: bool,
+              refine: bool) -> TCAResult:
     slice_te = contact.offset + _lead_correction(pair, z)
     valid = contact.valid
-    te = _binding_te(pair, depth, phi, ks, z, contact, slice_te, n_mid, surface)
+    te = _binding_te(pair, depth, phi, ks, z, contact, slice_te, n_mid, surface, refine)
     safe_te = jnp.where(valid, slice_te, 0.0)
     x1, x2, normal, v12, frac = _contact_geometry(pair, depth, phi, ks, z, contact, safe_te)
     radii = pair.action_radii()
