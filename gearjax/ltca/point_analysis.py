@@ -263,15 +263,20 @@ def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length
     gaps, u1, u2, z, te, frac, normal = (contact[name] for name in ("gap", "u1", "u2", "z", "te", "frac", "normal"))
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
-    # Each zone's coefficients for every pair, then each pair's own zone's: the zones' pair
-    # windows need not be the same length (`tca.merge_zones`), so the axis is not split.
-    per_zone = []
-    for zone in pair.contact_zones():
-        per_zone.append(jnp.vectorize(
-            lambda *a, zone=zone: jnp.stack(_contact_coefficients(zone, sections, *a[:8], material, decay_length)),
-            signature="(),(),(),(),(),(),(3),()->(4)",
-        )(k, phi1, u1, u2, z, te, normal, frac))
-    return contact, jnp.where((tca.pair_zone == 0)[None, :, None], per_zone[0], per_zone[1])
+    zones = pair.contact_zones()
+    if len(zones) == 1:
+        def coefficients(zone_index, *args):
+            return jnp.stack(_contact_coefficients(zones[0], sections, *args, material, decay_length))
+    else:
+        # each pair in its own zone (`contact_zone` of a traced index: one trace for all);
+        # the zones' pair windows need not be the same length (`tca.merge_zones`)
+        def coefficients(zone_index, *args):
+            return jnp.stack(_contact_coefficients(pair.contact_zone(zone_index), sections, *args, material,
+                                                   decay_length))
+
+    zone = jnp.broadcast_to(tca.pair_zone[None, :], gaps.shape)
+    return contact, jnp.vectorize(coefficients, signature="(),(),(),(),(),(),(),(3),()->(4)")(
+        zone, k, phi1, u1, u2, z, te, normal, frac)
 
 
 def point_contact_analysis(pair, tca: TCAResult, torque: ArrayLike, material: Material | None = None,
