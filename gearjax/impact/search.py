@@ -14,7 +14,8 @@ is continuous in $z$ (`tca.face_peak`: around the best slice, the face ends incl
 the best slice's: a tip edge crossing a short relief touches over a stretch of the face
 narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the
 first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
-equals $\mathrm{LTE}_{\neg k}$ there). The first touching candidate gives the point M at
+equals $\mathrm{LTE}_{\neg k}$ there, up to the TE the search's loaded contact counts
+from: the largest slice value, unrefined between the slices). The first touching candidate gives the point M at
 $z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
 flank point. The same search serves every tooth family; on point-contact flanks
 (double circular arc) the incoming pair's touching point is the one the loaded contact
@@ -112,8 +113,9 @@ def evaluate(ctx: SearchContext, column, phi1):
     around the best slice $j$; for point-contact flanks `point_peak`, where the loaded
     contact puts it): `(te, lte, tca, peak), (j, solved)`."""
     acc = ctx.model.accuracy
-    # Only the loaded TE is used from the TCA's TE, and it does not depend on the reference
-    # the separations count from: no refinement of the TE between slices.
+    # The TCA's TE is used only as the reference of the loaded TE, which counts from it
+    # (separations and rotation alike) and so depends on it only to second order: it is
+    # not refined between slices (decision 0014).
     tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None],
                                  refine_peak=False)
     active = jnp.arange(tca.pair_index.shape[0]) != column

@@ -74,7 +74,9 @@ def tooth_contact_analysis(
             slices (`tca.peak`; with at least 3 slices). False keeps the largest slice
             value: a smaller program for callers that use only differences to the TE,
             such as the loaded TE (the LTCA's separations and its rotation count from the
-            same TE, so the loaded TE does not depend on it).
+            same TE, so the loaded TE depends on it only where a contact normal's moment
+            arm about the gear axis differs from $r_{b2}$ times its transverse fraction:
+            modified flanks and edge contacts, a small fraction of the shift).
 
     Returns:
         `TCAResult`.
