@@ -356,6 +356,10 @@ def _contact_geometry(pair, depth, phi, ks, z, contact: SliceContact, slice_te):
 
 def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int, surface: bool,
               refine: bool) -> TCAResult:
+    """The `TCAResult` of the slice contacts: each slice's value with the leads' correction
+    (rad), the binding TE (`_binding_te`), each contact's points, normal and velocity at
+    its own touching position, and the separations from the TE along the normal,
+    $(\\Delta - \\Delta_i)\\,r_{b2}f_i$ (mm; `inf` where a slice does not touch)."""
     slice_te = contact.offset + _lead_correction(pair, z)
     valid = contact.valid
     te = _binding_te(pair, depth, phi, ks, z, contact, slice_te, n_mid, surface, refine)
