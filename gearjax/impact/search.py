@@ -15,8 +15,8 @@ the best slice's: a tip edge crossing a short relief touches over a stretch of t
 narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the
 first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
 equals $\mathrm{LTE}_{\neg k}$ there, up to the TE the search's loaded contact counts
-from: the largest slice value, unrefined between the slices). The first touching candidate gives the point M at
-$z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
+from: the largest slice value, unrefined between the slices). The first touching
+candidate gives the point M at $z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
 flank point. The same search serves every tooth family; on point-contact flanks
 (double circular arc) the incoming pair's touching point is the one the loaded contact
 locates between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$ counts from
@@ -114,8 +114,8 @@ def evaluate(ctx: SearchContext, column, phi1):
     contact puts it): `(te, lte, tca, peak), (j, solved)`."""
     acc = ctx.model.accuracy
     # The TCA's TE is used only as the reference of the loaded TE, which counts from it
-    # (separations and rotation alike) and so depends on it only to second order: it is
-    # not refined between slices (decision 0014).
+    # (separations and rotation alike), so a shift of it cancels but for a small fraction:
+    # it is not refined between slices (decision 0014).
     tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None],
                                  refine_peak=False)
     active = jnp.arange(tca.pair_index.shape[0]) != column

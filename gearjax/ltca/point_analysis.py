@@ -264,15 +264,12 @@ def point_coefficients(pair, tca: TCAResult, material: Material, coupling_length
     phi1 = jnp.broadcast_to(tca.pinion_angle[:, None], gaps.shape)
     k = jnp.broadcast_to(tca.pair_index[None, :].astype(gaps.dtype), gaps.shape)
     zones = pair.contact_zones()
-    if len(zones) == 1:
-        def coefficients(zone_index, *args):
-            return jnp.stack(_contact_coefficients(zones[0], sections, *args, material, decay_length))
-    else:
+
+    def coefficients(zone_index, *args):
         # each pair in its own zone (`contact_zone` of a traced index: one trace for all);
         # the zones' pair windows need not be the same length (`tca.merge_zones`)
-        def coefficients(zone_index, *args):
-            return jnp.stack(_contact_coefficients(pair.contact_zone(zone_index), sections, *args, material,
-                                                   decay_length))
+        zone = zones[0] if len(zones) == 1 else pair.contact_zone(zone_index)
+        return jnp.stack(_contact_coefficients(zone, sections, *args, material, decay_length))
 
     zone = jnp.broadcast_to(tca.pair_zone[None, :], gaps.shape)
     return contact, jnp.vectorize(coefficients, signature="(),(),(),(),(),(),(),(3),()->(4)")(
