@@ -6,6 +6,7 @@ pair carries no nested Newton solve, and that `Scene` checks the declared capabi
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 import gearjax as gj
@@ -18,6 +19,8 @@ from gearjax.geometry import (
     DoubleArcZone,
     InvoluteGearPair,
 )
+from gearjax.geometry import resolve
+from gearjax.papers.seed001 import paper_optimum
 from gearjax.ltca import AbstractSliceCompliance, IsoCompliance, SliceCompliance
 
 FAMILIES = (InvoluteGearPair, CurvilinearGearPair, DoubleArcGearPair, DoubleArcZone)
@@ -87,6 +90,28 @@ def test_resolved_pair_carries_no_nested_solve(seed_pair):
     assert _count_while(point, resolved) == 0
     assert jnp.allclose(point(resolved), point(shifted), rtol=0, atol=1e-12)
     assert resolved.resolve() is resolved
+
+
+def test_a_concrete_pair_resolves_in_one_program_to_the_formulas_values(seed_pair, monkeypatch):
+    """On concrete arrays `resolve()` runs one compiled program, whose values are those of
+    the formulas evaluated eagerly (to rounding: XLA fuses them); a scene's checks resolve
+    its pair once and keep the pair as given."""
+    pairs = (
+        InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0, profile_shift=(0.3, -0.1)),
+        CurvilinearGearPair((20, 30), 2.0, 20.0, 20.0, 60.0),
+        DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0, 0.0),
+    )
+    for pair in pairs:
+        resolved, eager = pair.resolve(), resolve._resolve(pair)
+        names = resolve._derived_names(type(pair))
+        assert names and set(resolved.derived) == set(eager.derived) == set(names)
+        for name in names:
+            assert np.allclose(resolved.derived[name], eager.derived[name], rtol=1e-13, atol=1e-13), name
+    calls = []
+    compiled = resolve._resolve_compiled
+    monkeypatch.setattr(resolve, "_resolve_compiled", lambda pair: calls.append(pair) or compiled(pair))
+    scene = gj.Scene(seed_pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=100.0))
+    assert len(calls) == 1 and scene.pair is seed_pair and seed_pair.derived is None
 
 
 def test_gradient_through_resolve_matches_finite_difference():

@@ -81,9 +81,9 @@ def _enable_x64() -> None:
 
 
 #: The command stores even its quickest compilations: building and reporting a scene runs
-#: about a hundred small eager operations, each compiled in tens of ms, which together cost
-#: more than the traced program's load (the library's default skips them, see
-#: `gearjax.runtime.cache.MIN_COMPILE_TIME_S`).
+#: about thirty small programs (the pair's derived geometry, the report's quantities and a
+#: few eager operations), which together compile in over a second (the library's default
+#: skips them, see `gearjax.runtime.cache.MIN_COMPILE_TIME_S`).
 COMMAND_MIN_COMPILE_TIME_S = 0.0
 
 

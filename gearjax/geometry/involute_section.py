@@ -33,7 +33,8 @@ import jax.numpy as jnp
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float, involute, inverse_involute, safe_sqrt
 from .._validate import check_range, is_concrete
-from ._base import AbstractFlankPair, derived, resolve_derived
+from ._base import AbstractFlankPair
+from .resolve import derived, resolve_derived
 from .involute_checks import check_feasible, check_section_inputs, per_gear
 from .involute_curve import half_tooth_angle, involute_normal, involute_point, involute_tangent, slice_frame
 
@@ -107,7 +108,7 @@ class AbstractInvolutePair(AbstractFlankPair):
         if center_distance is not None:
             check_range("center_distance", center_distance, 0.0, None, low_inclusive=False, unit="mm")
         if is_concrete(self):
-            check_feasible(self, center_distance)
+            check_feasible(self.resolve(), center_distance)
 
     # ------------------------------------------------------------------ ISO 21771 quantities
     @derived

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 
+import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .._solution import RESULTS, enum_message, enum_name
@@ -28,47 +30,73 @@ def _list(x, scale=1.0) -> list[float]:
     return [float(v) * scale for v in np.asarray(x).ravel()]
 
 
+# What the report derives from the pair and from a result, each in one compiled program
+# rather than one small eager program per operation (each compiled, or read from the
+# cache, in every process before the first line is printed).
+@eqx.filter_jit
+def _geometry(pair) -> dict:
+    return pair.geometry_report()
+
+
+@eqx.filter_jit
+def _quantities(result: SimulationResult) -> dict:
+    tca, ltca = result.tca, result.ltca
+    out = {
+        "te_peak_to_peak": tca.te_peak_to_peak,
+        "te_peak_to_peak_line": tca.te_peak_to_peak_line,
+        "binding": tca.binding,
+        "edge": tca.kind != ContactKind.flank,
+        "contact_slices": jnp.sum(tca.in_contact(1e-7), axis=(1, 2)),
+    }
+    if ltca is not None:
+        names = ("lte_peak_to_peak", "lte_peak_to_peak_line", "load_share", "normal_load", "mean_mesh_stiffness",
+                 "mesh_stiffness_tangent", "mesh_stiffness_secant", "max_load_share", "max_pressure")
+        out |= {name: getattr(ltca, name) for name in names}
+    return out
+
+
 def geometry_dict(scene: Scene) -> dict:
     """The pair's `geometry_report()` as plain numbers (lists per gear)."""
     pair = scene.pair
     out = {"family": type(pair).__name__, "teeth": list(pair.teeth)}
-    for key, value in pair.geometry_report().items():
+    for key, value in _geometry(pair).items():
         array = np.asarray(value)
         out[key] = float(array) if array.ndim == 0 else _list(array)
     return out
 
 
-def tca_dict(scene: Scene, result: SimulationResult) -> dict:
+def tca_dict(scene: Scene, result: SimulationResult, q: dict) -> dict:
+    """The TCA's figures; `q`: `_quantities(result)`."""
     tca = result.tca
     te = np.asarray(tca.transmission_error)
-    rb = _f(tca.action_radius[1])
-    edge = ~np.asarray(tca.kind == ContactKind.flank)
+    rb = float(np.asarray(tca.action_radius)[1])
     valid = np.asarray(tca.valid)
-    pair_idx, slice_idx = (np.asarray(a) for a in tca.binding)
-    binding_edge = edge[np.arange(te.size), pair_idx, slice_idx]
+    pair_idx, slice_idx = (np.asarray(a) for a in q["binding"])
+    binding_edge = np.asarray(q["edge"])[np.arange(te.size), pair_idx, slice_idx]
     return {
         "method": scene.accuracy.tca_method,
         "positions": int(te.size),
-        "te_peak_to_peak_urad": _f(tca.te_peak_to_peak) * URAD_PER_RAD,
-        "te_peak_to_peak_um": _f(tca.te_peak_to_peak_line) * UM_PER_MM,
+        "te_peak_to_peak_urad": _f(q["te_peak_to_peak"]) * URAD_PER_RAD,
+        "te_peak_to_peak_um": _f(q["te_peak_to_peak_line"]) * UM_PER_MM,
         "te_mean_um": float(np.mean(te)) * rb * UM_PER_MM,
         "pinion_angle_deg": _list(tca.pinion_angle, 180.0 / math.pi),
         "te_urad": _list(te, URAD_PER_RAD),
         "te_um": _list(te, rb * UM_PER_MM),
         "edge_contact_positions": int(np.sum(binding_edge)),
         "pairs": [int(k) for k in np.asarray(tca.pair_index)],
-        "contact_slices_per_position": [int(v) for v in np.asarray(tca.in_contact(1e-7)).sum((1, 2))],
+        "contact_slices_per_position": [int(v) for v in np.asarray(q["contact_slices"])],
         "valid_slice_contacts": int(valid.sum()),
         "unconverged_solves": int(np.asarray(tca.unconverged).sum()),
         "result": enum_name(tca.result),
     }
 
 
-def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
+def ltca_dict(scene: Scene, result: SimulationResult, q: dict) -> dict:
+    """The loaded contact's figures; `q`: `_quantities(result)`."""
     ltca = result.ltca
-    rb2 = _f(ltca.action_radius[1])
+    rb2 = float(np.asarray(ltca.action_radius)[1])
     lte = np.asarray(ltca.transmission_error)
-    share = np.asarray(ltca.load_share)
+    share = np.asarray(q["load_share"])
     point = {}
     if ltca.point_contact is not None:
         contact = ltca.point_contact
@@ -80,16 +108,16 @@ def ltca_dict(scene: Scene, result: SimulationResult) -> dict:
         "compliance": type(scene.compliance).__name__,
         "extended_contact": scene.extended_contact,
         "torque_Nm": _f(ltca.torque) / 1000.0,
-        "normal_load_N": float(np.mean(np.asarray(ltca.normal_load))),
-        "lte_peak_to_peak_um": _f(ltca.lte_peak_to_peak_line) * UM_PER_MM,
-        "lte_peak_to_peak_urad": _f(ltca.lte_peak_to_peak) * URAD_PER_RAD,
+        "normal_load_N": float(np.mean(np.asarray(q["normal_load"]))),
+        "lte_peak_to_peak_um": _f(q["lte_peak_to_peak_line"]) * UM_PER_MM,
+        "lte_peak_to_peak_urad": _f(q["lte_peak_to_peak"]) * URAD_PER_RAD,
         "lte_mean_um": float(np.mean(lte)) * rb2 * UM_PER_MM,
         "lte_um": _list(lte, rb2 * UM_PER_MM),
-        "mean_mesh_stiffness_N_per_mm_um": _f(ltca.mean_mesh_stiffness),
-        "mesh_stiffness_tangent_N_per_mm_um": _list(ltca.mesh_stiffness_tangent),
-        "mesh_stiffness_secant_N_per_mm_um": _list(ltca.mesh_stiffness_secant),
-        "max_load_share": _f(ltca.max_load_share),
-        "max_pressure_MPa": _f(ltca.max_pressure),
+        "mean_mesh_stiffness_N_per_mm_um": _f(q["mean_mesh_stiffness"]),
+        "mesh_stiffness_tangent_N_per_mm_um": _list(q["mesh_stiffness_tangent"]),
+        "mesh_stiffness_secant_N_per_mm_um": _list(q["mesh_stiffness_secant"]),
+        "max_load_share": _f(q["max_load_share"]),
+        "max_pressure_MPa": _f(q["max_pressure"]),
         "load_share_per_pair": [_list(row) for row in share.T],
         "converged": bool(np.all(np.asarray(ltca.converged))),
         "result": enum_name(ltca.result),
@@ -122,7 +150,7 @@ def _one_impact(imp, action_radius) -> dict:
         "gear_roll_length_mm": _f(imp.gear_parameter),
         "face_position_mm": _f(imp.slice_z),
         "pinion_angle_deg": _f(imp.pinion_angle) * 180.0 / math.pi,
-        "loaded_te_um": _f(imp.loaded_te) * _f(action_radius[1]) * UM_PER_MM,
+        "loaded_te_um": _f(imp.loaded_te) * float(np.asarray(action_radius)[1]) * UM_PER_MM,
         "stiffness_coefficient_N_per_mm_n": _f(stiff.coefficient),
         "stiffness_exponent": _f(stiff.exponent),
         "stiffness_fit_error": _f(stiff.fit_error),
@@ -130,16 +158,17 @@ def _one_impact(imp, action_radius) -> dict:
         "base_radius_equivalent_mass_kg": _f(imp.base_radius_mass) * 1e3,
         "approach_um": _f(imp.approach) * UM_PER_MM,
         "kinetic_energy_J": _f(imp.kinetic_energy) * 1e-3,
-        "converged": bool(np.asarray(imp.result == RESULTS.successful)),
+        "converged": enum_name(imp.result) == enum_name(RESULTS.successful),
         "result": enum_name(imp.result),
     }
 
 
 def result_dict(scene: Scene, result: SimulationResult, notes: list[str] | None = None) -> dict:
     """Everything `gearjax run --json` prints."""
-    out = {"geometry": geometry_dict(scene), "tca": tca_dict(scene, result)}
+    q = _quantities(result)
+    out = {"geometry": geometry_dict(scene), "tca": tca_dict(scene, result, q)}
     if result.ltca is not None:
-        out["ltca"] = ltca_dict(scene, result)
+        out["ltca"] = ltca_dict(scene, result, q)
     if result.impact is not None:
         out["impact"] = impact_dict(scene, result)
     out["operating"] = {
