@@ -104,14 +104,15 @@ class Scene(eqx.Module):
             accuracy = Accuracy.preset(accuracy)
         if isinstance(pitches, bool) or not isinstance(pitches, int) or not 1 <= pitches <= MAX_PITCHES:
             raise ValueError(f"pitches must be an integer in [1, {MAX_PITCHES}]; got {pitches!r}")
-        # The checks read the pair's derived geometry: resolved once, in one program; the
-        # scene keeps the pair as given, so derivatives flow through its parameters.
+        # The checks read the pair's derived geometry, resolved once (each quantity would
+        # otherwise evaluate the chain of those it depends on); the scene keeps the pair as
+        # given, so derivatives flow through its parameters.
         checked = pair.resolve() if is_concrete(pair) else pair
         for name, mod in (("modification", modification), ("gear_modification", gear_modification)):
             if mod is not None:
                 check_modification_fits(checked, mod, 0 if name == "modification" else 1, name)
         if pairs is None:
-            if not is_concrete(pair):
+            if not is_concrete(checked):
                 raise ValueError("pairs must be given when the scene is built inside a transformation")
             try:
                 pairs = pair_window(checked, pitches)
@@ -124,7 +125,7 @@ class Scene(eqx.Module):
         self.operating = operating
         self.material = Material() if material is None else material
         self.compliance = _compliance(pair, compliance, effects, accuracy)
-        self.hub_radius = _hub_radius(pair, hub_radius, checked)
+        self.hub_radius = _hub_radius(checked, hub_radius)
         self.inertia = _inertia(inertia)
         self.effects = effects
         self.accuracy = accuracy
@@ -235,17 +236,16 @@ def check_one_zone(scene: Scene, what: str) -> None:
         )
 
 
-def _hub_radius(pair: AbstractGearPair, hub_radius, resolved: AbstractGearPair) -> jax.Array:
-    """Hub radii (mm), shape (..., 2), default half the root radii of `pair`; inside the root
-    circles (checked on `resolved`, the same pair resolved)."""
+def _hub_radius(pair: AbstractGearPair, hub_radius) -> jax.Array:
+    """Hub radii (mm), shape (..., 2), default half the root radii; inside the root circles."""
     if hub_radius is None:
         return 0.5 * pair.root_radius
     hub_radius = as_float(hub_radius)
     if hub_radius.ndim == 0 or hub_radius.shape[-1] != 2:
         hub_radius = jnp.stack([hub_radius, hub_radius], -1)
     check_range("hub_radius", hub_radius, 0.0, None, low_inclusive=False, unit="mm")
-    if is_concrete(hub_radius, resolved.root_radius):
-        root = np.asarray(resolved.root_radius)
+    if is_concrete(hub_radius, pair.root_radius):
+        root = np.asarray(pair.root_radius)
         if np.any(np.asarray(hub_radius) >= root):
             raise ValueError(
                 f"hub_radius must be in (0, r_f) = (0, {np.min(root[..., 0]):.3f}) / (0, "

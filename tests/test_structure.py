@@ -19,7 +19,8 @@ from gearjax.geometry import (
     DoubleArcZone,
     InvoluteGearPair,
 )
-from gearjax.geometry import resolve
+from gearjax.geometry import involute_section
+from gearjax.geometry._base import _derived_names
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.ltca import AbstractSliceCompliance, IsoCompliance, SliceCompliance
 
@@ -92,26 +93,30 @@ def test_resolved_pair_carries_no_nested_solve(seed_pair):
     assert resolved.resolve() is resolved
 
 
-def test_a_concrete_pair_resolves_in_one_program_to_the_formulas_values(seed_pair, monkeypatch):
-    """On concrete arrays `resolve()` runs one compiled program, whose values are those of
-    the formulas evaluated eagerly (to rounding: XLA fuses them); a scene's checks resolve
-    its pair once and keep the pair as given."""
+def test_a_scene_resolves_its_pair_once_for_its_checks_and_keeps_it_as_given(seed_pair, monkeypatch):
+    """`resolve()` gives every derived quantity the value of its formula on the unresolved
+    pair, bit for bit (every family); a scene's checks (modification fit, pair window, hub
+    radius) read one resolution of its pair, so they solve its working pressure angle once,
+    and the scene keeps the pair as given; built inside `jit` around a concrete pair, a
+    scene asks for its pairs."""
     pairs = (
         InvoluteGearPair((29, 71), 5.0, 20.0, 27.5, 42.0, profile_shift=(0.3, -0.1)),
         CurvilinearGearPair((20, 30), 2.0, 20.0, 20.0, 60.0),
         DoubleArcGearPair((24, 24), 4.0, 15.0, 55.0, 0.0),
     )
     for pair in pairs:
-        resolved, eager = pair.resolve(), resolve._resolve(pair)
-        names = resolve._derived_names(type(pair))
-        assert names and set(resolved.derived) == set(eager.derived) == set(names)
+        resolved = pair.resolve()
+        names = _derived_names(type(pair))
+        assert names and set(resolved.derived) == set(names)
         for name in names:
-            assert np.allclose(resolved.derived[name], eager.derived[name], rtol=1e-13, atol=1e-13), name
-    calls = []
-    compiled = resolve._resolve_compiled
-    monkeypatch.setattr(resolve, "_resolve_compiled", lambda pair: calls.append(pair) or compiled(pair))
+            assert np.array_equal(resolved.derived[name], getattr(pair, name)), name
+    solves = []  # the working pressure angle's inverse-involute solves
+    solve = involute_section.inverse_involute
+    monkeypatch.setattr(involute_section, "inverse_involute", lambda value: solves.append(value) or solve(value))
     scene = gj.Scene(seed_pair, paper_optimum(), operating=gj.OperatingPoint(torque_Nm=100.0))
-    assert len(calls) == 1 and scene.pair is seed_pair and seed_pair.derived is None
+    assert len(solves) == 1 and scene.pair is seed_pair
+    with pytest.raises(ValueError, match="pairs must be given"):
+        jax.jit(lambda x: gj.Scene(seed_pair).hub_radius + x)(0.0)
 
 
 def test_gradient_through_resolve_matches_finite_difference():

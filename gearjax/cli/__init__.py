@@ -81,9 +81,8 @@ def _enable_x64() -> None:
 
 
 #: The command stores even its quickest compilations: building and reporting a scene runs
-#: about thirty small programs (the pair's derived geometry, the report's quantities and a
-#: few eager operations), which together compile in over a second (the library's default
-#: skips them, see `gearjax.runtime.cache.MIN_COMPILE_TIME_S`).
+#: dozens of small eager operations, which together compile in over a second (the
+#: library's default skips them, see `gearjax.runtime.cache.MIN_COMPILE_TIME_S`).
 COMMAND_MIN_COMPILE_TIME_S = 0.0
 
 

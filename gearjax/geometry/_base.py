@@ -37,12 +37,19 @@ Two levels, both declared here:
 A family that leaves any of these undeclared cannot be instantiated (equinox names the
 missing attributes), so nothing downstream probes a pair with `getattr`/`hasattr`.
 
-Quantities that depend on the pair only are `derived` properties, resolved once
-(`gearjax.geometry.resolve`).
+**Derived geometry resolved once.** Quantities that depend on the pair only (working
+pressure angle — an inverse-involute Newton solve —, centre distance, radii, placements)
+are `derived` properties. `pair.resolve()` evaluates them once and returns a pair that
+carries their values (field `derived`); every stage resolves its pair on entry, so the
+residuals of the contact solves read constants instead of re-tracing their formulas (as
+lineax's `init`/`compute` split does). Gradients flow through `resolve()` like through
+any other computation. Edit an unresolved pair (e.g. with `eqx.tree_at`): a resolved pair
+keeps the values it was resolved with.
 """
 
 import abc
 import dataclasses
+import functools
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -79,6 +86,34 @@ class SceneFileSpec:
     keys: dict
     required: tuple[str, ...] = ("teeth", "normal_module")
     fixed: tuple[tuple[str, ...], str] = ((), "")
+
+
+def derived(method):
+    """A property of a gear pair that depends on its parameters only.
+
+    Evaluated from the formula on an unresolved pair; read from `pair.derived` on a pair
+    returned by `resolve()`.
+    """
+    name = method.__name__
+
+    @functools.wraps(method)
+    def getter(self):
+        cache = self.derived
+        if cache is not None and name in cache:
+            return cache[name]
+        return method(self)
+
+    getter.is_derived = True
+    return property(getter)
+
+
+def _derived_names(cls) -> tuple[str, ...]:
+    names = []
+    for klass in reversed(cls.__mro__):
+        for name, value in vars(klass).items():
+            if isinstance(value, property) and getattr(value.fget, "is_derived", False) and name not in names:
+                names.append(name)
+    return tuple(names)
 
 
 class AbstractGearPair(eqx.Module):
@@ -134,9 +169,9 @@ class AbstractGearPair(eqx.Module):
     # ------------------------------------------------------------------ derived geometry
     @abc.abstractmethod
     def resolve(self):
-        """This pair with every `derived` quantity evaluated once (`gearjax.geometry.resolve`);
-        a resolved pair is returned as it is. Families with derived quantities of their own
-        return `resolve_derived(self)`."""
+        """This pair with every `derived` quantity evaluated once (see the module
+        docstring); a resolved pair is returned as it is. Families with derived quantities
+        of their own return `resolve_derived(self)`."""
 
     @property
     def gear_ratio(self) -> float:
@@ -303,6 +338,20 @@ class AbstractFlankPair(AbstractGearPair):
 # ---------------------------------------------------------------------------------------
 # Generic implementations of the flank methods, by differentiation of the family's profile
 # and lead: a family without closed forms returns these from its methods.
+def resolve_derived(pair):
+    """`pair` with every `derived` quantity evaluated once (see the module docstring); a
+    resolved pair is returned as it is."""
+    if pair.derived is not None:
+        return pair
+    resolved = eqx.tree_at(lambda p: p.derived, pair, {}, is_leaf=lambda x: x is None)
+    for name in _derived_names(type(pair)):
+        # Each quantity is evaluated on the partly resolved pair, so it reuses the
+        # ones before it (the working pressure angle is solved once).
+        value = getattr(resolved, name)
+        resolved = eqx.tree_at(lambda p: p.derived, resolved, {**resolved.derived, name: value})
+    return resolved
+
+
 def generic_profile_tangent(pair: AbstractFlankPair, gear: int, u: ArrayLike):
     """Point and derivative $\\mathrm{d}P/\\mathrm{d}u$ of the local profile, by forward-mode
     differentiation of `local_profile`."""

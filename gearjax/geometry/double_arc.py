@@ -44,8 +44,7 @@ import numpy as np
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float
 from .._validate import check_range, is_concrete
-from ._base import AbstractGearPair, SceneFileSpec
-from .resolve import derived, resolve_derived
+from ._base import AbstractGearPair, SceneFileSpec, derived, resolve_derived
 from .double_arc_rack import CONCAVE, CONVEX, GBT12759Rack, by_arc, generated_point
 from .double_arc_zone import DoubleArcZone
 

@@ -33,8 +33,7 @@ import jax.numpy as jnp
 from .._custom_types import Array, ArrayLike, Float, Scalar
 from .._numerics import as_float, involute, inverse_involute, safe_sqrt
 from .._validate import check_range, is_concrete
-from ._base import AbstractFlankPair
-from .resolve import derived, resolve_derived
+from ._base import AbstractFlankPair, derived, resolve_derived
 from .involute_checks import check_feasible, check_section_inputs, per_gear
 from .involute_curve import half_tooth_angle, involute_normal, involute_point, involute_tangent, slice_frame
 

@@ -30,16 +30,11 @@ def _list(x, scale=1.0) -> list[float]:
     return [float(v) * scale for v in np.asarray(x).ravel()]
 
 
-# What the report derives from the pair and from a result, each in one compiled program
-# rather than one small eager program per operation (each compiled, or read from the
-# cache, in every process before the first line is printed).
-@eqx.filter_jit
-def _geometry(pair) -> dict:
-    return pair.geometry_report()
-
-
 @eqx.filter_jit
 def _quantities(result: SimulationResult) -> dict:
+    """What the report derives from a result, in one compiled program (a fresh process
+    compiles it once per result structure, where each of its operations would be an eager
+    program of its own)."""
     tca, ltca = result.tca, result.ltca
     out = {
         "te_peak_to_peak": tca.te_peak_to_peak,
@@ -59,7 +54,7 @@ def geometry_dict(scene: Scene) -> dict:
     """The pair's `geometry_report()` as plain numbers (lists per gear)."""
     pair = scene.pair
     out = {"family": type(pair).__name__, "teeth": list(pair.teeth)}
-    for key, value in _geometry(pair).items():
+    for key, value in pair.resolve().geometry_report().items():
         array = np.asarray(value)
         out[key] = float(array) if array.ndim == 0 else _list(array)
     return out

@@ -13,7 +13,7 @@ and compiling it with XLA (about a minute on a 2-core CPU). Two caches on disk r
   its compilation is then found in JAX's cache.
 
 The command line enables both by default, and while it runs it stores even its quickest
-compilations (building and reporting a scene runs about thirty small programs;
+compilations (building and reporting a scene runs dozens of small eager programs;
 `gearjax ... --no-cache` disables all of it). The library never changes JAX's
 configuration on import, so in Python the caches are opt-in:
 
