@@ -579,7 +579,7 @@ def test_a_start_that_never_had_a_finite_value_moves_to_the_centre():
 def test_notebook_06_runs_in_this_process_with_its_programs(objective, space, ga_run, monkeypatch):
     """Notebook 06 (GA and gradient descent on this file's objective) runs here rather than
     in a kernel (`_notebooks.py`): its gradient program is the one this file compiles for
-    2 starts, which a kernel traced and compiled a second time (a cache miss: another key).
+    2 starts, which a kernel would trace and, missing the cache (another key), compile again.
     Its two runs certify at this file's `CERTIFY` rather than at `reference`: the same
     program at other static shapes, whose compile and two runs took about 270 s under the
     test flags, more than half of the test; `ga_run` has compiled it (certification itself
