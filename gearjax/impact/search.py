@@ -16,11 +16,11 @@ narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA bracke
 first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
 equals $\mathrm{LTE}_{\neg k}$ there, up to the TE the search's loaded contact counts
 from: the largest slice value, unrefined between the slices). The first touching
-candidate gives the point M at $z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when it is a
-flank point. The same search serves every tooth family; on point-contact flanks
-(double circular arc) the incoming pair's touching point is the one the loaded contact
-locates between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$ counts from
-the same located peaks.
+candidate gives the point M at $z^*$, its normal and the **regime**: `edge` when it is a
+tip edge, `surface` when it is a flank point. The same search serves every tooth family;
+on point-contact flanks (double circular arc) the incoming pair's touching point is the one
+the loaded contact locates between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$
+counts from the same located peaks.
 
 **Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
 binding slice or candidate changes, or where the LTCA's active set does), so a
