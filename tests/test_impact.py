@@ -393,3 +393,27 @@ def test_notebook_05_runs_in_this_process_with_its_programs(seed_pair):
     np.testing.assert_array_equal(np.asarray(ns["paper"]), np.asarray(PAPER))
     assert [r.regime_name for r in ns["std"]] == [impact(seed_pair, PLAIN, t).regime_name for t in ns["loads"]]
     assert float(ns["mod"][-1].force) == pytest.approx(float(impact(seed_pair, PAPER, 1600.0).force), rel=1e-12)
+
+
+def test_seed001_reproduction_sets_gearjax_beside_table4(seed_pair):
+    """`gearjax.papers.seed001.reproduce` (`gearjax reproduce seed001`): the seed's Table 4
+    beside gearjax's forces, at this module's accuracy (its program is this module's)."""
+    from gearjax.papers.seed001 import TABLE4_IMPACT_FORCE, reproduce, summary
+
+    out = reproduce(ACC, trajectory_loads_Nm=(1000.0,), transition=False)
+    assert [row["torque_Nm"] for row in out["table4"]] == list(TABLE4_IMPACT_FORCE)
+    direct = impact(seed_pair, PAPER, 1000.0)
+    row = out["table4"][1]
+    assert row["modified"]["force_N"] == pytest.approx(float(direct.force), rel=1e-12)
+    assert row["modified"]["regime"] == direct.regime_name
+    # the unmodified pair strikes with the tip edge at every load, its force growing with it
+    standard = [r["standard"] for r in out["table4"]]
+    assert all(r["regime"] == "edge" and r["converged"] for r in standard)
+    assert standard[0]["force_N"] < standard[1]["force_N"] < standard[2]["force_N"]
+    assert out["trajectory"]["modified"][0]["force_N"] == pytest.approx(row["modified"]["force_N"], rel=1e-12)
+    speed = out["speed"]
+    assert speed["force_ratio_5000_over_2500"] == pytest.approx(speed["predicted_2_pow_2n_over_n_plus_1"], rel=1e-9)
+    assert out["check"] is None and out["transition_torque_Nm"] is None
+    text = summary(out)
+    assert "not checked against a finer setting" in text and "261.0 mm" in text
+    assert f"{standard[1]['force_N']:7.0f} N" in text

@@ -5,7 +5,7 @@ was found continuously along the face, flipped between a flank and a tip-edge st
 the slice count (the GA and gradient optima of that time), the paper's optimum, and the two
 random designs of the study with the largest error at the `default` preset's 21 slices.
 One program per slice count for all of them (`simulate_designs`); the whole study, 33 designs
-at 21/41/81/161 slices, is `tools/impact_convergence.py`.
+at 21/41/81/161 slices, is `benchmarks/studies/impact_convergence.py`.
 """
 
 import numpy as np

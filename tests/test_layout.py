@@ -25,12 +25,13 @@ MODULES = {_name(p): p for p in SOURCES}
 
 
 def _imports(name: str) -> set[str]:
-    """The package's modules that module `name` imports at its top level (imports inside
-    functions and under `TYPE_CHECKING` run later or never, so they close no cycle)."""
+    """The package's modules that module `name` imports anywhere: at its top level, inside
+    functions and under `TYPE_CHECKING` (a deferred import still ties the two modules
+    together, so it may close no cycle either)."""
     path = MODULES[name]
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
-    for node in ast.parse(path.read_text()).body:
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             found |= {a.name for a in node.names if a.name in MODULES}
         elif isinstance(node, ast.ImportFrom):

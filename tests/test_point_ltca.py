@@ -179,7 +179,10 @@ def test_reproduce_dca_json(loaded, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["reproduce", "dca", "--accuracy", "fine"], "--accuracy: accuracy preset must be one of"),
     (["reproduce", "dca", "--accuracy", "default@64"], "--accuracy: accuracy must be PRESET or PRESET@PxS"),
-    (["reproduce", "curvilinear", "--accuracy", "default"], "--accuracy applies to `reproduce dca` only"),
+    (["reproduce", "curvilinear", "--accuracy", "default"], "--accuracy applies to `reproduce dca` and `reproduce seed001` only"),
+    (["reproduce", "seed001", "--accuracy", "default@x"], "--accuracy: accuracy must be PRESET or PRESET@PxS"),
+    (["reproduce", "seed001", "--check-slices", "-1"], "--check-slices: must be in [0, 10000]; got -1"),
+    (["reproduce", "dca", "--check-slices", "41"], "--check-slices applies to `reproduce seed001` only"),
 ])
 def test_reproduce_refuses_a_bad_accuracy_before_any_work(argv, message, capsys):
     assert main(argv) == 2

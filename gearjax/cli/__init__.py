@@ -1,7 +1,8 @@
 """The `gearjax` command.
 
     gearjax run [SCENE.toml] [--json] [--no-cache]
-    gearjax reproduce curvilinear|dca [--json] [--cross-check] [--accuracy SPEC] [--no-cache]
+    gearjax reproduce seed001|curvilinear|dca [--json] [--cross-check] [--accuracy SPEC] [--check-slices N]
+                      [--no-cache]
     gearjax optimize [SCENE.toml] [--method ga|gradient] [--out DIR] [--resume] [--json] [--quiet]
     gearjax sweep [SCENE.toml] --torque-Nm LIST --speed-rpm LIST [--chunk N] [--out DIR] [--resume]
                   [--json] [--plot] [--quiet]

@@ -27,24 +27,22 @@ flanks) is derived here, so the contact analysis needs nothing family-specific.
 Two levels, both declared here:
 
 * `AbstractGearPair`: what a user holds and a `Scene` takes. It declares the stages the
-  family supports (`supported_effects`) and its contact zones (`contact_zones()`): one
-  surface pair per zone of simultaneous contact, `(self,)` for single-zone families.
+  family supports (`supported_effects`) and its contact zones (`contact_zones()`, one
+  surface pair per zone of simultaneous contact; `contact_zone(index)` for a traced index).
 * `AbstractFlankPair`: one zone's pair of drive flanks, the interface above, on which the
   TCA works. It declares how the TCA may treat it: `conjugate_slices` (plane-of-action
   fast path), `screen_edges` (edge candidates screened by the conjugate contact) and
   `linear_lead` (peak refinement of edge candidates between slices).
 
 A family that leaves any of these undeclared cannot be instantiated (equinox names the
-missing attributes), so nothing downstream probes a pair with `getattr`/`hasattr`.
+missing attributes): nothing downstream probes a pair with `getattr`/`hasattr`.
 
 **Derived geometry resolved once.** Quantities that depend on the pair only (working
-pressure angle — an inverse-involute Newton solve —, centre distance, radii, placements)
-are `derived` properties. `pair.resolve()` evaluates them once and returns a pair that
-carries their values (field `derived`); every stage resolves its pair on entry, so the
-residuals of the contact solves read constants instead of re-tracing their formulas (as
-lineax's `init`/`compute` split does). Gradients flow through `resolve()` like through
-any other computation. Edit an unresolved pair (e.g. with `eqx.tree_at`): a resolved pair
-keeps the values it was resolved with.
+pressure angle, centre distance, radii, placements) are `derived` properties;
+`pair.resolve()` evaluates them once into a pair that carries their values (`derived`),
+so the contact solves' residuals read constants (lineax's `init`/`compute` split).
+Gradients flow through `resolve()`. A resolved pair keeps the values it was resolved
+with: edit an unresolved one (e.g. with `eqx.tree_at`).
 """
 
 import abc
@@ -77,8 +75,7 @@ class SceneFileSpec:
             units); kind is "teeth" (two integers), "number", "number_or_pair" (one
             number, or one per gear) or "text"; the constructor's default is the key's.
         required: keys a file must give.
-        fixed: keys that other families accept but this one fixes, with why (the error
-            reads `is <why> for family = "..."`).
+        fixed: keys other families accept but this one fixes, with why (`is <why> for ...`).
     """
 
     family: str
@@ -89,11 +86,8 @@ class SceneFileSpec:
 
 
 def derived(method):
-    """A property of a gear pair that depends on its parameters only.
-
-    Evaluated from the formula on an unresolved pair; read from `pair.derived` on a pair
-    returned by `resolve()`.
-    """
+    """A property of a gear pair that depends on its parameters only: the formula on an
+    unresolved pair, `pair.derived` on a pair returned by `resolve()`."""
     name = method.__name__
 
     @functools.wraps(method)
@@ -143,8 +137,12 @@ class AbstractGearPair(eqx.Module):
     @abc.abstractmethod
     def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
         """The pair's zones of simultaneous contact, one flank pair each, in the order of
-        `TCAResult.pair_zone`; `(self,)` for single-zone families. A family with several
-        also gives `contact_zone(index)` for an integer array `index` (`vmap`: one trace)."""
+        `TCAResult.pair_zone`; `(self,)` for single-zone families."""
+
+    @abc.abstractmethod
+    def contact_zone(self, index) -> "AbstractFlankPair":
+        """Zone `index` of `contact_zones()`; also for an integer array `index`, so that one
+        `vmap` over the zone index analyses every zone in one trace."""
 
     @property
     @abc.abstractmethod
@@ -213,6 +211,9 @@ class AbstractFlankPair(AbstractGearPair):
     def contact_zones(self) -> "tuple[AbstractFlankPair, ...]":
         """A flank pair is its own single zone."""
         return (self,)
+
+    def contact_zone(self, index) -> "AbstractFlankPair":
+        return self
 
     # ------------------------------------------------------------------ family interface
     @abc.abstractmethod

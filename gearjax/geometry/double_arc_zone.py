@@ -5,7 +5,7 @@ The pair's geometry and the zones' meaning: `double_arc.py`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import jax.numpy as jnp
 import numpy as np
@@ -15,6 +15,7 @@ from .._numerics import as_float
 from .._validate import is_concrete
 from ._base import (
     AbstractFlankPair,
+    AbstractGearPair,
     generic_profile_normal,
     generic_profile_tangent,
     generic_slice_point,
@@ -23,21 +24,19 @@ from ._base import (
 )
 from .double_arc_rack import CONCAVE, CONVEX, by_arc
 
-if TYPE_CHECKING:
-    from .double_arc import DoubleArcGearPair
-
 class DoubleArcZone(AbstractFlankPair):
     """The drive flanks of one contact zone of a `DoubleArcGearPair`: the pinion's convex
     addendum on the gear's concave dedendum (`zone` 0, convex driving tooth) or the
     pinion's concave dedendum on the gear's convex addendum (`zone` 1).
 
     Attributes:
-        gears: the pair.
+        gears: the `DoubleArcGearPair` (typed by its base: the pair's module builds its
+            zones, so this one does not import it).
         zone: 0 or 1; an integer array under `vmap` over the zones
             (`DoubleArcGearPair.contact_zone`).
     """
 
-    gears: DoubleArcGearPair
+    gears: AbstractGearPair
     zone: int | Array
 
     #: Not conjugate: no plane-of-action fast path; edges are screened by the window only.

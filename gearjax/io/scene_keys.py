@@ -13,85 +13,19 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 import re
 from collections.abc import Callable
-from typing import Any
 
 from ..accuracy import DTYPES, PRESETS, TCA_METHODS
 from ..ltca import COMPLIANCE_MODELS
 from ..ltca.compliance import HERTZ_LAWS
 from ..operating import MAX_SPEED_RPM, MAX_TORQUE_NM
+from ..optimize.settings import scene_keys as optimize_scene_keys
 from ..scene import EFFECTS, MAX_PITCHES
-
-_INF = float("inf")
-
-
-@dataclasses.dataclass(frozen=True)
-class SceneKey:
-    """One key of a scene-file section.
-
-    Attributes:
-        key: the name in the file.
-        unit: the unit of its value in the file ("" for none).
-        default: the value that leaving the key out means, as written in a file; None
-            where leaving it out means something else (`absent` says what).
-        meaning: what it sets, in an engineer's words.
-        bounds: (low, high, low inclusive, high inclusive) of a number, or of each
-            number of a list, in the file's unit; None where `choices` or `allowed` say it.
-        choices: the allowed strings.
-        allowed: the allowed values in words, where bounds and choices do not say it all.
-        absent: what leaving the key out means when `default` is None.
-        integer: the value is an integer.
-    """
-
-    key: str
-    unit: str
-    default: Any
-    meaning: str
-    bounds: tuple[float, float, bool, bool] | None = None
-    choices: tuple[str, ...] | None = None
-    allowed: str = ""
-    absent: str = ""
-    integer: bool = False
-
-    def allowed_text(self) -> str:
-        """The allowed values as the reference prints them."""
-        parts = []
-        if self.choices is not None:
-            parts.append(" \\| ".join(f'`"{c}"`' for c in self.choices))
-        if self.bounds is not None:
-            parts.append(("integer in " if self.integer else "") + _range(self.bounds))
-        if self.allowed:
-            parts.append(self.allowed)
-        return "; ".join(parts)
-
-    def default_text(self) -> str:
-        return f"`{toml_value(self.default)}`" if self.default is not None else self.absent
-
-
-def _range(bounds: tuple[float, float, bool, bool]) -> str:
-    """`[low, high]`, `(low, ∞)`, ...: an interval as the reference and the errors print it."""
-    low, high, low_in, high_in = bounds
-    opens = "[" if low_in and abs(low) != _INF else "("
-    closes = "]" if high_in and abs(high) != _INF else ")"
-    return f"{opens}{_num(low)}, {_num(high)}{closes}"
-
-
-def _num(value: float) -> str:
-    return "∞" if value == _INF else "−∞" if value == -_INF else f"{value:g}"
-
-
-def toml_value(value) -> str:
-    """A value as it is written in a scene file."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(toml_value(v) for v in value) + "]"
-    return repr(value)
-
+from .declared_keys import INF as _INF
+from .declared_keys import SceneKey as SceneKey
+from .declared_keys import check_keys, range_text
+from .declared_keys import toml_value as toml_value
 
 _AMOUNT = (0.0, 1000.0, True, True)
 _LENGTH = (0.0, _INF, False, True)
@@ -136,65 +70,10 @@ def _ltca_keys() -> tuple[SceneKey, ...]:
     )
 
 
-def _optimize_keys() -> tuple[SceneKey, ...]:
-    # the optimiser's declarations; imported here, since the optimiser reads scene files
-    from ..optimize.objective import AGGREGATES, QUANTITIES
-    from ..optimize.run import METHODS
-    from ..optimize.settings import OptimizeSettings
-    from ..optimize.space import _MODULE_BOUNDS
-    from ..optimize.space import SCENE_KEYS as DESIGN_KEYS
-
-    d = {f.name: f.default for f in dataclasses.fields(OptimizeSettings)}
-    count = lambda key, low, meaning: SceneKey(key, "", d[key], meaning, (low, _INF, True, True), integer=True)  # noqa: E731
-    weight = lambda key, unit, meaning: SceneKey(key, unit, d[key], meaning, _NON_NEGATIVE)  # noqa: E731
-    keys = [
-        SceneKey("method", "", d["method"], "search method", choices=METHODS),
-        SceneKey("objective", "", d["objective"], "quantity minimised: " + "; ".join(
-            f"`{name}`, {what} ({unit})" for name, (unit, what, _) in QUANTITIES.items()), choices=tuple(QUANTITIES)),
-        SceneKey("loads_Nm", "N·m", None, "pinion torques of the load spectrum", (0.0, _INF, False, True),
-                 absent="the scene's torque", allowed="a non-empty list"),
-        SceneKey("load_weights", "", None, "weights of the loads", _NON_NEGATIVE, absent="equal",
-                 allowed="one per load, with a positive sum"),
-        SceneKey("aggregate", "", d["aggregate"], "over the loads: weighted mean or maximum", choices=AGGREGATES),
-        count("error_samples", 0, "sampled mesh errors per design (0: the scene's own errors)"),
-        weight("misalignment_um", "µm", "tolerance of f_ma: samples drawn from U(−t, t)"),
-        weight("base_pitch_deviation_um", "µm", "tolerance of f_pb"),
-        SceneKey("max_pressure_MPa", "MPa", None, "limit of the largest Hertz pressure (penalised beyond)",
-                 _POSITIVE, absent="no limit"),
-        weight("pressure_penalty", "", "weight of the pressure penalty, in the objective's unit"),
-        SceneKey("max_lte_um", "µm", None, "limit of the loaded TE peak-to-peak (penalised beyond)", _POSITIVE,
-                 absent="no limit"),
-        weight("lte_penalty", "", "weight of the loaded-TE penalty, in the objective's unit"),
-        SceneKey("accuracy", "", None, "accuracy preset of the search", choices=_PRESETS,
-                 absent="the scene's (`[analysis] accuracy`)"),
-        SceneKey("certify", "", d["certify"], "preset at which the best candidates are evaluated again "
-                 "(`none`: no certification)", choices=_PRESETS + ("none",)),
-        count("certify_top", 1, "candidates certified"),
-        count("population", 2, "GA population"),
-        count("generations", 1, "GA generations"),
-        count("starts", 1, "gradient: Latin-hypercube starts"),
-        count("iterations", 1, "gradient: Adam iterations per start"),
-        SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
-                 (0.0, 1.0, False, True)),
-        SceneKey("smoothing", "", d["smoothing"], "gradient: σ₀ of the Gaussian smoothing of the objective, in "
-                 "the unit cube of the bounds, annealed to 0 (0: none)", (0.0, 0.5, True, True)),
-        count("smoothing_pairs", 1, "gradient: antithetic sample pairs per start and iteration when smoothing"),
-        count("seed", 0, "random seed of the search and of the error samples"),
-    ]
-    scales = ("m_n",) * 5 + ("b",)
-    for i, ((key, _), (low, high), scale) in enumerate(zip(DESIGN_KEYS, _MODULE_BOUNDS, scales)):
-        keys.append(SceneKey(key, "µm" if key.endswith("_um") else "mm", None,
-                             f"bounds `[lower, upper]` of y{i + 1} (`[modification] {key}`)",
-                             absent=f"seed 001's: [{low:g}, {high:g}] {scale}",
-                             allowed="lower < upper; within the active flank and face width"))
-    return tuple(keys)
-
-
 @functools.cache
 def _sections() -> dict[str, Callable[[], tuple[SceneKey, ...]]]:
     """Every section but `[pair]`: section name -> the function declaring its keys (each
-    built on demand: `[optimize]`'s declarations import the optimiser, which reads scene
-    files)."""
+    built on demand; `[optimize]`'s are the optimiser's own, `gearjax.optimize.settings`)."""
     return {
         "modification": lambda: _modification("pinion's drive-flank"),
         "gear_modification": lambda: _modification("gear's drive-flank"),
@@ -232,7 +111,7 @@ def _sections() -> dict[str, Callable[[], tuple[SceneKey, ...]]]:
             SceneKey("dtype", "", None, "floating-point precision", choices=DTYPES, absent="the preset's"),
             SceneKey("pitches", "", 1, "angular pitches covered", (1, MAX_PITCHES, True, True), integer=True),
         ),
-        "optimize": _optimize_keys,
+        "optimize": optimize_scene_keys,
     }
 
 
@@ -247,24 +126,8 @@ def declared(section: str) -> tuple[SceneKey, ...]:
 
 
 def check_declared(section: str, table: dict) -> None:
-    """The declared bounds and choices of `section`'s keys in `table`, in the file's units:
-    `ValueError("[section] key: must be in [low, high] unit; got value unit")`. Values of
-    another type are left to the section's reader, which names them."""
-    keys = {k.key: k for k in declared(section)} if section in _sections() else {}
-    for name, value in table.items():
-        key = keys.get(name)
-        if key is None:
-            continue
-        if key.choices is not None and isinstance(value, str) and value not in key.choices:
-            raise ValueError(f"[{section}] {name}: must be {' or '.join(repr(c) for c in key.choices)}; got {value!r}")
-        if key.bounds is None:
-            continue
-        for v in value if isinstance(value, list) else [value]:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or _inside(v, key.bounds):
-                continue
-            unit = f" {key.unit}" if key.unit else ""
-            shown = f"{v:g}" if isinstance(v, float) else (str(v) if len(str(v)) < 20 else f"an integer of {len(str(abs(v)))} digits")
-            raise ValueError(f"[{section}] {name}: must be in {_range(key.bounds)}{unit}; got {shown}{unit}")
+    """The declared bounds and choices of `section`'s keys in `table` (`check_keys`)."""
+    check_keys(section, declared(section) if section in _sections() else (), table)
 
 
 _FIELD = re.compile(r"^(?P<fields>[A-Za-z_]+(?:\.[A-Za-z_]+)?(?:\[\d\])?(?: \([^)]*\))?(?: / [A-Za-z_]+)*)(?:=| )(?P<rest>.*)$", re.S)
@@ -288,17 +151,6 @@ def field_message(section: str, message: str, fields: dict[str, tuple[str, str]]
         return f"[{section}] {message}"
     where, key = fields[head]
     return f"[{where}] {key}{match['fields'][len(head):]}: {match['rest']}"
-
-
-def _inside(value: float, bounds: tuple[float, float, bool, bool]) -> bool:
-    low, high, low_in, high_in = bounds
-    try:
-        value = float(value)
-    except OverflowError:  # an integer beyond the float range
-        return False
-    if not math.isfinite(value):
-        return False
-    return (value >= low if low_in else value > low) and (value <= high if high_in else value < high)
 
 
 def reference() -> str:

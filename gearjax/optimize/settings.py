@@ -40,15 +40,15 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from ..accuracy import Accuracy
-from ..io.scene_keys import check_declared
+from ..accuracy import PRESETS, Accuracy
+from ..io.declared_keys import INF, SceneKey, check_keys
 from ..scene import Scene
 from .certification import scene_with_accuracy
 from .ga import GAConfig
 from .gradient import GradientConfig
 from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
 from .run import METHODS
-from .space import PARAMETERS, SCENE_KEYS, DesignSpace
+from .space import _MODULE_BOUNDS, PARAMETERS, SCENE_KEYS, DesignSpace
 
 _KEYS = {
     "method", "objective", "loads_Nm", "load_weights", "aggregate", "error_samples", "misalignment_um",
@@ -119,7 +119,7 @@ class OptimizeSettings:
             if key not in _KEYS:
                 raise _fail(key, f"unknown field; allowed: {', '.join(sorted(_KEYS))}")
         try:
-            check_declared("optimize", table)
+            check_keys("optimize", scene_keys(), table)
         except ValueError as err:
             raise SettingsError(str(err)) from None
         out: dict[str, Any] = {}
@@ -204,3 +204,52 @@ class OptimizeSettings:
     def gradient_config(self) -> GradientConfig:
         return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate,
                               smoothing=self.smoothing, smoothing_pairs=self.smoothing_pairs)
+
+
+def scene_keys() -> tuple[SceneKey, ...]:
+    """The `[optimize]` section's keys with unit, default, allowed values and meaning, in
+    the order of the scene-file reference (`gearjax.io.scene_keys.reference`)."""
+    d = {f.name: f.default for f in dataclasses.fields(OptimizeSettings)}
+    count = lambda key, low, meaning: SceneKey(key, "", d[key], meaning, (low, INF, True, True), integer=True)  # noqa: E731
+    weight = lambda key, unit, meaning: SceneKey(key, unit, d[key], meaning, (0.0, INF, True, True))  # noqa: E731
+    keys = [
+        SceneKey("method", "", d["method"], "search method", choices=METHODS),
+        SceneKey("objective", "", d["objective"], "quantity minimised: " + "; ".join(
+            f"`{name}`, {what} ({unit})" for name, (unit, what, _) in QUANTITIES.items()), choices=tuple(QUANTITIES)),
+        SceneKey("loads_Nm", "N·m", None, "pinion torques of the load spectrum", (0.0, INF, False, True),
+                 absent="the scene's torque", allowed="a non-empty list"),
+        SceneKey("load_weights", "", None, "weights of the loads", (0.0, INF, True, True), absent="equal",
+                 allowed="one per load, with a positive sum"),
+        SceneKey("aggregate", "", d["aggregate"], "over the loads: weighted mean or maximum", choices=AGGREGATES),
+        count("error_samples", 0, "sampled mesh errors per design (0: the scene's own errors)"),
+        weight("misalignment_um", "µm", "tolerance of f_ma: samples drawn from U(−t, t)"),
+        weight("base_pitch_deviation_um", "µm", "tolerance of f_pb"),
+        SceneKey("max_pressure_MPa", "MPa", None, "limit of the largest Hertz pressure (penalised beyond)",
+                 (0.0, INF, False, True), absent="no limit"),
+        weight("pressure_penalty", "", "weight of the pressure penalty, in the objective's unit"),
+        SceneKey("max_lte_um", "µm", None, "limit of the loaded TE peak-to-peak (penalised beyond)", (0.0, INF, False, True),
+                 absent="no limit"),
+        weight("lte_penalty", "", "weight of the loaded-TE penalty, in the objective's unit"),
+        SceneKey("accuracy", "", None, "accuracy preset of the search", choices=tuple(PRESETS),
+                 absent="the scene's (`[analysis] accuracy`)"),
+        SceneKey("certify", "", d["certify"], "preset at which the best candidates are evaluated again "
+                 "(`none`: no certification)", choices=tuple(PRESETS) + ("none",)),
+        count("certify_top", 1, "candidates certified"),
+        count("population", 2, "GA population"),
+        count("generations", 1, "GA generations"),
+        count("starts", 1, "gradient: Latin-hypercube starts"),
+        count("iterations", 1, "gradient: Adam iterations per start"),
+        SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
+                 (0.0, 1.0, False, True)),
+        SceneKey("smoothing", "", d["smoothing"], "gradient: σ₀ of the Gaussian smoothing of the objective, in "
+                 "the unit cube of the bounds, annealed to 0 (0: none)", (0.0, 0.5, True, True)),
+        count("smoothing_pairs", 1, "gradient: antithetic sample pairs per start and iteration when smoothing"),
+        count("seed", 0, "random seed of the search and of the error samples"),
+    ]
+    scales = ("m_n",) * 5 + ("b",)
+    for i, ((key, _), (low, high), scale) in enumerate(zip(SCENE_KEYS, _MODULE_BOUNDS, scales)):
+        keys.append(SceneKey(key, "µm" if key.endswith("_um") else "mm", None,
+                             f"bounds `[lower, upper]` of y{i + 1} (`[modification] {key}`)",
+                             absent=f"seed 001's: [{low:g}, {high:g}] {scale}",
+                             allowed="lower < upper; within the active flank and face width"))
+    return tuple(keys)

@@ -35,7 +35,7 @@ overflow in LLVM's JIT linker). Where the installed jaxlib is not known to load 
 (`gearjax.optimize`: gradient descent and `sensitivities` share it) keeps itself out of the
 cache with `exclude_from_persistent_cache`; with a current jaxlib it is cached like every
 other program, and a later process loads it instead of compiling it.
-`python tools/check_cache_gradient_load.py [--raw]` runs it in two fresh processes with
+`python benchmarks/studies/check_cache_gradient_load.py [--raw]` runs it in two fresh processes with
 one cache.
 """
 

@@ -14,7 +14,7 @@ times the number of loads a sweep batches. The constants are XLA's own plan for 
 program (`Compiled.memory_analysis()`, temporary buffers) of the default scene at 1000 N·m
 with 81, 161 and 21 face slices (P = 32, K = 5): 51.3 MB at S = 83 and 201.1 MB at
 S = 163 give $c = (201.1 - 51.3)\\,\\text{MB} / ((163^2 - 83^2) P K \\cdot 8) = 5.9$, and the
-8.6 MB at S = 23 less its quadratic part gives $c_1 = 156$. `tools/memory_model.py`
+8.6 MB at S = 23 less its quadratic part gives $c_1 = 156$. `benchmarks/studies/memory_model.py`
 recomputes them and checks the estimate against the measured peak memory of two larger
 scenes (README, "Memory guard").
 

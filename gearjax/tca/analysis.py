@@ -86,8 +86,9 @@ def tooth_contact_analysis(
         return _zone_analysis(zones[0], depth, accuracy, pairs, pitches, pinion_angles, refine_peak)
     # Families with several contact zones per tooth (double circular arc: convex and concave
     # driving tooth): one analysis per zone, merged along the pair axis; with a given
-    # window, all zones in one `vmap` over the zone index (one trace).
-    if pairs is None or not hasattr(pair, "contact_zone"):  # `pair_window` needs concrete zones
+    # window, all zones in one `vmap` over the zone index (one trace; `contact_zone` takes
+    # an integer array wherever `contact_zones` has several).
+    if pairs is None:  # `pair_window` needs concrete zones
         return merge_zones([_zone_analysis(zone, depth, accuracy, pairs, pitches, pinion_angles, refine_peak)
                             for zone in zones])
 

@@ -1,7 +1,7 @@
 """Seed 001's modification optimisation, by the GA and by gradient descent,
 and a robust design over a load spectrum and sampled misalignment.
 
-    python tools/optimize_seed001.py [--quick] [--robust] [--accuracy default] [--population 40]
+    python benchmarks/studies/optimize_seed001.py [--quick] [--robust] [--accuracy default] [--population 40]
         [--generations 30] [--starts 8] [--iterations 40] [--robust-generations 10] [--out FILE]
         [--certify reference] [--run-dir DIR]
 
@@ -17,7 +17,7 @@ accuracy over the three loads, beside the paper's Table 4. Writes the JSON resul
 convergence figure (docs/figures/optimize_convergence.png). With `--run-dir DIR` every
 search keeps its run directory there, and a rerun resumes where the last one stopped.
 
-    python tools/optimize_seed001.py --reevaluate
+    python benchmarks/studies/optimize_seed001.py --reevaluate
 
 evaluates the stored designs again with the current code (after an engine fix) and
 rewrites only the JSON's `forces` table.
@@ -35,7 +35,6 @@ jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
 
-import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
@@ -47,7 +46,7 @@ from gearjax.papers.seed001 import (  # noqa: E402
     seed_pair,
 )
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 LOADS = (400.0, 1000.0, 1600.0)
 
 
@@ -233,7 +232,7 @@ def check_robust(args, robust: dict) -> None:
 
     errors = go.sample_errors(robust["samples"], misalignment=robust["misalignment_tolerance_um"] * 1e-3, seed=0)
     base = gj.Accuracy.preset(args.certify)
-    finer = check_accuracy.finer(base, args.check_robust, args.check_positions)
+    finer = base.finer(args.check_robust, args.check_positions)
     objective = go.Objective.create(scene(finer), torques_Nm=robust["loads_Nm"], errors=errors)
     evaluate_one = eqx.filter_jit(lambda o, d: o.batch(d))
     check = {"face_slices": finer.face_slices, "positions_per_pitch": finer.positions_per_pitch}

@@ -1,7 +1,7 @@
 """What a compiled program is made of: its equations counted by the gearjax function that
 emitted them.
 
-    python tools/program_anatomy.py [--grad] [--accuracy fast] [--top 40] [--hlo]
+    python benchmarks/studies/program_anatomy.py [--grad] [--accuracy fast] [--top 40] [--hlo]
 
 Traces the optimiser's objective for one design (seed 001 pair, the paper's optimum, impact
 at 1 000 N·m and 5 000 rpm) with `jax.make_jaxpr`, or its value and gradient with `--grad`,

@@ -1,7 +1,7 @@
 """The memory model of `gearjax.runtime.resources`: its constants from XLA's memory plan, and its
 estimate against the measured peak memory of larger scenes.
 
-    python tools/memory_model.py
+    python benchmarks/studies/memory_model.py
 
 Each size runs in a fresh process: the default scene (seed 001 pair, paper optimum,
 1000 N·m, LTCA, `default` accuracy) with `face_slices` changed. For 21, 81 and 161 slices

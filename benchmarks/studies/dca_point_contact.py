@@ -2,12 +2,12 @@
 β 15°) at a pinion torque, at one or more accuracy presets, so that the figures can be
 compared between grids (`gearjax.ltca.point_analysis`, the `ltca` stage of this family).
 
-    python tools/dca_point_contact.py [--torque-Nm 100] [--accuracy fast default default@64x41]
+    python benchmarks/studies/dca_point_contact.py [--torque-Nm 100] [--accuracy fast default default@64x41]
 
 An accuracy is a preset's name, or `PRESET@PxS`: the preset with P positions per pitch and S
 face slices (to tell the two grids' effects apart).
 
-    python tools/dca_point_contact.py --peak-error 9 21 41 [--accuracy default@32x81]
+    python benchmarks/studies/dca_point_contact.py --peak-error 9 21 41 [--accuracy default@32x81]
 
 instead measures how well a parabola through three slices finds a point contact's peak:
 the rigid TCA at the (fine) accuracy gives each contact's slice TE along the face; that

@@ -1,7 +1,7 @@
 """Forward-mode derivatives of the double-circular-arc mesh-in impact force against central
 differences, in the pinion torque and the axial pitch error.
 
-    python tools/dca_force_gradient.py [--torque-Nm 100] [--axial-pitch-error-um 50]
+    python benchmarks/studies/dca_force_gradient.py [--torque-Nm 100] [--axial-pitch-error-um 50]
                                        [--accuracy default] [--rtol 0.02]
 
 The seed pair (m_n 4, z 24/24, b 55 mm, β 15°) at 200 rpm with `effects = ["impact"]`:
@@ -32,7 +32,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import gearjax as gj  # noqa: E402
-from dca_impact import seed_scene  # noqa: E402  (tools/, the script's directory)
+from dca_impact import seed_scene  # noqa: E402  (benchmarks/studies/, the script's folder)
 
 
 #: what each zone's row holds: the force (checked) and the quantities it is made of (printed)

@@ -2,7 +2,7 @@
 its point-contact loaded model, per contact zone, at one or more accuracies, so that the
 figures can be compared between grids (`gearjax.impact` on `ToothSectionCompliance`).
 
-    python tools/dca_impact.py [--torque-Nm 50 100 200] [--speed-rpm 200]
+    python benchmarks/studies/dca_impact.py [--torque-Nm 50 100 200] [--speed-rpm 200]
                                [--accuracy default default@64x21 default@32x41]
                                [--axial-pitch-error-um 0 20 -20 373.2]
 

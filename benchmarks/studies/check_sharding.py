@@ -1,6 +1,6 @@
 """Sharded sweeps against one device, on forced CPU host devices.
 
-    python tools/check_sharding.py [--devices 4] [--timeout 600]
+    python benchmarks/studies/check_sharding.py [--devices 4] [--timeout 600]
 
 Runs, in a subprocess with `XLA_FLAGS=--xla_force_host_platform_device_count=N`, the seed
 001 default scene at `fast`: `impact_sweep` of 3 torques × 2 speeds on one device and with

@@ -1,11 +1,11 @@
 """The impact objective's landscape around seed 001's optima: one-dimensional scans.
 
-    python tools/landscape.py [--accuracy reference] [--points 41] [--chunk 8]
+    python benchmarks/studies/landscape.py [--accuracy reference] [--points 41] [--chunk 8]
                               [--out docs/results/landscape.json] [--plot docs/figures/landscape.png]
                               [--markdown] [--report]
 
 Designs: the certified gradient and GA optima at 1 000 N·m of `--optima`
-(`docs/results/optimize_seed001.json`, written by `tools/optimize_seed001.py`), the paper's
+(`docs/results/optimize_seed001.json`, written by `benchmarks/studies/optimize_seed001.py`), the paper's
 optimum (Table 2) and an earlier GA optimum of the 21-slice discretisation. Through each,
 the objective of the optimiser (F_s at 1 000 N·m and 5 000 rpm) is evaluated along each of
 the six parameters over seed 001's bounds (the others held), and along the segments
@@ -41,7 +41,7 @@ import numpy as np  # noqa: E402
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: seed 001's bounds of the six modification parameters (mm)
 LOWER = np.array([0.005, 0.005, 0.5, 0.5, 0.005, 0.0])
 UPPER = np.array([0.075, 0.075, 4.0, 4.0, 0.075, 21.0])
@@ -61,7 +61,7 @@ EARLIER_GA = np.array([0.024398921672800573, 0.04673654456449089, 0.5, 0.5, 0.02
 
 def designs(optima: Path) -> dict[str, np.ndarray]:
     """The scanned designs: the paper's optimum, the earlier GA optimum and the certified
-    gradient and GA optima at 1 000 N·m of `optima` (`tools/optimize_seed001.py`'s JSON)."""
+    gradient and GA optima at 1 000 N·m of `optima` (`benchmarks/studies/optimize_seed001.py`'s JSON)."""
     stored = json.loads(optima.read_text())["designs_mm"]
     return {"gradient (certified)": np.asarray(stored["gradient, 1000 N·m"]),
             "paper optimum": np.asarray(paper_optimum().as_vector()),

@@ -1,6 +1,6 @@
 """The default scene's impact sweep at two accuracies: is the published force map converged?
 
-    python tools/sweep_check.py [--accuracy reference] [--check-slices 161] [--torque-Nm 100:1600:16] [--speed-rpm 1000:6000:6]
+    python benchmarks/studies/sweep_check.py [--accuracy reference] [--check-slices 161] [--torque-Nm 100:1600:16] [--speed-rpm 1000:6000:6]
 
 `gj.impact_sweep` of the built-in scene (seed 001 pair, paper optimum) on the torque x speed
 grid at `--accuracy`, and again with `--check-slices` face slices (4x the preset's contact
@@ -21,13 +21,12 @@ jax.config.update("jax_enable_x64", True)
 
 import numpy as np  # noqa: E402
 
-import _check_accuracy as check_accuracy  # noqa: E402  (tools/, the script's folder)
 
 import gearjax as gj  # noqa: E402
 from gearjax.cli.sweep import parse_list  # noqa: E402
 from gearjax.io.scene_file import default_scene  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def sweep(accuracy: gj.Accuracy, torques, speeds):
@@ -53,7 +52,7 @@ def main() -> None:
     torques, speeds = parse_list("--torque-Nm", args.torque_Nm), parse_list("--speed-rpm", args.speed_rpm)
     base = gj.Accuracy.preset(args.accuracy)
     a = sweep(base, torques, speeds)
-    b = sweep(check_accuracy.finer(base, args.check_slices), torques, speeds)
+    b = sweep(base.finer(args.check_slices), torques, speeds)
     difference = np.abs(a["force_N"] / b["force_N"] - 1.0)
     edge = a["regime"][:, 0] == "edge"
     result = {

@@ -1,6 +1,6 @@
 """Reverse-mode gradient of the optimiser's impact objective against central differences.
 
-    python tools/impact_gradient_check.py [--step 1e-4]
+    python benchmarks/studies/impact_gradient_check.py [--step 1e-4]
 
 The seed 001 pair at the `fast` preset, 1 000 N·m, 5 000 rpm (the objective of
 `tests/test_optimize.py`), at the two starts of its gradient test: seed 001's lower bounds

@@ -3,8 +3,8 @@
 Two fresh processes compute the optimiser's batched value and gradient of the seed 001
 objective (`fast`, 2 designs) with one new cache directory.
 
-    python tools/check_cache_gradient_load.py         # gearjax's program: several minutes on 2 cores
-    python tools/check_cache_gradient_load.py --raw   # the same gradient, never excluded from the cache
+    python benchmarks/studies/check_cache_gradient_load.py         # gearjax's program: several minutes on 2 cores
+    python benchmarks/studies/check_cache_gradient_load.py --raw   # the same gradient, never excluded from the cache
 
 With a current jaxlib (>= 0.12) the first process writes the program and the second loads
 it and prints the same value and gradient. With jaxlib 0.10.2, `--raw` shows why gearjax keeps

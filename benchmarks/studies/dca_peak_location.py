@@ -1,7 +1,7 @@
 """How well the point-contact LTCA locates each contact between the face slices, on the
 double-circular-arc seed pair's rigid TCA (`gearjax.ltca.point_analysis.closest_contact`).
 
-    python tools/dca_peak_location.py [--slices 21 41 81] [--reference 321]
+    python benchmarks/studies/dca_peak_location.py [--slices 21 41 81] [--reference 321]
 
 Runs the rigid TCA on a fine grid of pinion angles (0.01° over the seed pair's strike
 windows at 25-200 N·m, -8.4..-6.2° and 4.6..6.4°) with S face slices, locates every pair's

@@ -1,6 +1,6 @@
 """Convergence of the mesh-in impact force in the face slices, on the seed 001 pair.
 
-    python tools/impact_convergence.py [--random 30] [--slices 11 21 41 81 161] [--out FILE] [--markdown]
+    python benchmarks/studies/impact_convergence.py [--random 30] [--slices 11 21 41 81 161] [--out FILE] [--markdown]
 
 Designs: the GA and gradient optima of `docs/results/optimize_seed001.json` (1 000 N·m), the
 paper optimum (Table 2) and `--random` designs drawn uniformly within seed 001's bounds
@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 import gearjax as gj  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: seed 001's bounds of the six modification parameters (mm)
 LOWER = np.array([0.005, 0.005, 0.5, 0.5, 0.005, 0.0])
 UPPER = np.array([0.075, 0.075, 4.0, 4.0, 0.075, 21.0])
