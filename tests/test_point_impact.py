@@ -72,8 +72,8 @@ def test_each_zones_force_is_the_energy_balance_of_the_points_own_law(struck):
 @eqx.filter_jit
 def _gap(ctx, column, phi1):
     """H at one pinion angle (rad): one program for every scene of the seed pair and column."""
-    (te, lte, _, _), _ = evaluate(ctx, column, phi1)
-    return te - lte
+    contact, _ = evaluate(ctx, column, phi1)
+    return contact.gap
 
 
 def _gaps(scene, imp):

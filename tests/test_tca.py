@@ -424,3 +424,17 @@ def test_edge_reachable_agrees_with_a_fine_scan_of_the_flanks(seed_pair):
     assert solved[:, 1].any() and solved[:, 2].any()
     # and `solve_candidates` counts no failed edge solve whose corner cannot reach
     assert not np.any(failed[:, 1:] & ~reach[:, 1:])
+
+
+def test_a_position_of_a_result_is_the_result_at_that_angle_alone(seed_pair, seed_unmodified):
+    """`TCAResult.position(i)`: the result at grid position `i` with a position axis of one,
+    every field the TCA at that angle alone gives (the positions are solved independently),
+    the result code recomputed from its own slices."""
+    pairs = pair_window(seed_pair)
+    i = 5
+    one = seed_unmodified.position(i)
+    alone = tca(seed_pair, FlankDepth(), ACC, pairs, seed_unmodified.pinion_angle[i:i + 1])
+    for (path, a), b in zip(jax.tree_util.tree_leaves_with_path(one), jax.tree_util.tree_leaves(alone)):
+        assert np.shape(a) == np.shape(b), path
+        np.testing.assert_allclose(np.asarray(a, float), np.asarray(b, float), rtol=1e-12, atol=1e-15, err_msg=str(path))
+    assert one.pinion_angle.shape == (1,) and one.slice_z.shape == seed_unmodified.slice_z.shape

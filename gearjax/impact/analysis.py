@@ -13,8 +13,10 @@ $\omega_1(z_1/z_2 + \mathrm{d\,LTE}_{\neg k}/\mathrm d\varphi_1)$ (the real, loa
 $v_n = \mathbf v^{(12)}\cdot\mathbf n = \omega_1(\mathbf v^{(12)}_0\cdot\mathbf n
 - q\,\mathrm{LTE}'_{\neg k})$, with $\mathbf v^{(12)}_0$ the relative velocity at the nominal
 ratio per unit pinion speed and $q$ the gear's moment arm of the normal. It equals the
-closing rate of the gap, $\omega_1 q H'(\varphi_1^*)$, a cross-check reported as
-`gap_closing_velocity`.
+closing rate of the gap, $\omega_1 q H'(\varphi_1^*)$, reported as `gap_closing_velocity`:
+for point contacts a cross-check (their $\Delta_k'$ is a central difference of the located
+peaks); on line contacts the search takes $\Delta_k' = \mathbf v^{(12)}_0\cdot\mathbf n/q$
+itself (`search.evaluate`), so there the two agree by construction.
 
 Local stiffness (`stiffness.py`), equivalent mass and force (`energy.py`) complete it.
 
@@ -86,7 +88,8 @@ class ImpactResult(eqx.Module):
             $\\mathrm d\\mathrm{LTE}_{\\neg k}/\\mathrm d\\varphi_1$ at $\\varphi_1^*$ (-).
         relative_velocity: $\\mathbf v^{(12)}$ at M, real kinematics (mm/s).
         velocity: $v_n = \\mathbf v^{(12)}\\cdot\\mathbf n$ (mm/s), positive approaching.
-        gap_closing_velocity: $\\omega_1qH'$ (mm/s), the same velocity from the gap's rate.
+        gap_closing_velocity: $\\omega_1qH'$ (mm/s), the same velocity from the gap's rate
+            (see the module docstring).
         pinion_arm, gear_arm: moment arms $p$, $q$ of the normal (mm).
         inertia: $(J_1, J_2)$ (t·mm²).
         mass: equivalent mass $m_{eq}$ (t).

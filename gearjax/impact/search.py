@@ -25,11 +25,14 @@ counts from the same located peaks.
 **Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
 binding slice or candidate changes, or where the LTCA's active set does), so a
 safeguarded Newton iteration finds $\varphi_1^*$ in a handful of steps (Numerical
-Recipes' `rtsafe`). Each step runs TCA and LTCA at one pinion angle inside one
-forward-mode pass that also gives the rates $\Delta_k'$, $\mathrm{LTE}_{\neg k}'$ and so
-$H'$. The bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$, starts as
-the grid step and moves its end of the same sign to every evaluated point; the first point
-is the regula-falsi point of the grid values; the next is the Newton point
+Recipes' `rtsafe`). Each step runs TCA and LTCA at the pinion angle and at its neighbours
+$\pm h$ in one call (`evaluate`): the rate $\mathrm{LTE}_{\neg k}'$ is the central
+difference there, $\Delta_k'$ the touching offset's rate at the first touching point
+(envelope theorem: the normal relative velocity over the gear's arm), and so $H'$. No
+forward-mode pass: the rates cost a position axis of three, not a second trace. The
+bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$, starts as the grid
+step and moves its end of the same sign to every evaluated point; the first point is the
+regula-falsi point of the grid values; the next is the Newton point
 $\varphi - H/H'$ when it lies inside the bracket and is at most half the previous step,
 else the bracket's midpoint (bisection), so the search never leaves the bracket and its
 steps at least halve. It has converged when $|H| \le$ atol and the Newton step or the
@@ -45,16 +48,17 @@ search stops and the impact's result is `first_contact_jump`. A jump is found by
 bisection, so it takes about as many evaluations as the bracket has bits above the
 tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged.
 The values at the last evaluated point, rates included, are the first contact's:
-the search is the only place the single-position TCA/LTCA is traced in a program that
-is not differentiated. The loop is a `lax.while_loop` with a result code, no callbacks.
+the search is the only place the TCA/LTCA at the search's angle is traced in a program
+that is not differentiated. The loop is a `lax.while_loop` with a result code, no
+callbacks.
 
 Gradients of $\varphi_1^*$ follow from the implicit function theorem,
 $\mathrm d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$, through a custom JVP
 (the iteration itself is not differentiated): differentiating evaluates the contact at
-the root once more, along the parameters' tangent and the root's together, so the rates
-(in the impact velocity) carry their own second-order change along $\varphi_1$. Where
-$H_\varphi = 0$ (zero load on perfect flanks: tangential engagement) the derivative is
-set to zero.
+the root once more, along the parameters' tangent and the root's together, so every
+output $Q$, the rates in the impact velocity included, changes by
+$\dot Q_\theta + Q'\dot\varphi_1^*$ (one first-order forward-mode pass). Where
+$H_\varphi = 0$ (zero load on perfect flanks: tangential engagement) it is set to zero.
 """
 
 from __future__ import annotations
@@ -66,7 +70,7 @@ import numpy as np
 
 from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide
-from ..ltca.analysis import LTCAResult, loaded_contact_analysis
+from ..ltca.analysis import LTCAResult, loaded_contact_analysis, moment_arms
 from ..ltca.model import ContactModel
 from ..ltca.point_analysis import closest_contact
 from ..tca import TCAResult, tooth_contact_analysis
@@ -107,68 +111,90 @@ class _Contact(eqx.Module):
         return self.te_slope - self.lte_slope
 
 
-def evaluate(ctx: SearchContext, column, phi1):
-    """TCA at one pinion angle, the loaded TE of the pairs other than `column` and the
-    incoming pair's first touching point along the face (`face_peak`, continuous in $z$
-    around the best slice $j$; for point-contact flanks `point_peak`, where the loaded
-    contact puts it): `(te, lte, tca, peak), (j, solved)`."""
+def rate_step(pair, dtype):
+    """Step $h$ (rad) of the central difference that gives $\\mathrm{LTE}_{\\neg k}'$:
+    $\\epsilon^{1/3}$ of the pinion's angular pitch (1.3e-6 rad on seed 001's pair in
+    float64), where the difference's truncation ($h^2$) and rounding ($\\epsilon/h$) errors
+    balance."""
+    return float(jnp.finfo(dtype).eps) ** (1.0 / 3.0) * pair.angular_pitch(0)
+
+
+def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
+    """The incoming pair `column` at pinion angle `phi1` and the loaded TE of the other
+    pairs, with the rates of both along $\\varphi_1$: `(contact, (j, solved))`, $j$ the
+    pair's best slice.
+
+    TCA and LTCA run at $\\varphi_1$ and $\\varphi_1 \\pm h$ (`rate_step`) in one call (a
+    position axis of three, so they are traced once): $\\mathrm{LTE}_{\\neg k}'$ is the
+    central difference of the loaded TE there. The incoming pair's first touching point
+    along the face at $\\varphi_1$ is `face_peak` (continuous in $z$ around the best slice;
+    for point-contact flanks `point_peak`, where the loaded contact puts it), and its rate
+    is that of the touching offset at a fixed material point (envelope theorem):
+    $\\Delta_k' = \\mathbf v^{(12)}_0\\cdot\\mathbf n / q$, the normal relative velocity per
+    unit pinion speed over the gear's arm (for point contacts, whose peak is interpolated
+    between slices, the central difference of the located peaks)."""
     acc = ctx.model.accuracy
-    # The TCA's TE is used only as the reference of the loaded TE, which counts from it
-    # (separations and rotation alike), so a shift of it cancels but for a small fraction:
-    # it is not refined between slices (decision 0014).
-    tca = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs, pinion_angles=phi1[None],
-                                 refine_peak=False)
-    active = jnp.arange(tca.pair_index.shape[0]) != column
-    ltca = loaded_contact_analysis(ctx.pair, tca, ctx.torque, ctx.model, active_pairs=active, rates=False)
+    h = rate_step(ctx.pair, jnp.result_type(phi1))
+    # The TCA's TE is only the reference the loaded TE counts from, so it is not refined
+    # between slices: a shift of it cancels but for a small fraction (decision 0014).
+    grid = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs,
+                                  pinion_angles=phi1 + h * jnp.array([-1.0, 0.0, 1.0], jnp.result_type(phi1)),
+                                  refine_peak=False)
+    active = jnp.arange(grid.pair_index.shape[0]) != column
+    ltca = loaded_contact_analysis(ctx.pair, grid, ctx.torque, ctx.model, active_pairs=active, rates=False)
+    tca = grid.position(1)
+    solved = jnp.all(ltca.converged)
+
+    def central(values):
+        return (values[2] - values[0]) / (2.0 * h)
+
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
     if ltca.point_contact is not None:
-        peak, top = point_peak(tca, column)
+        peak, te, top = point_peak(grid, column)
         # the loaded pairs' contacts sit at the rigid TE of the located peaks, less the lag
-        return (peak.te, top - ltca.rotation[0], tca, peak), (j, ltca.converged[0])
+        lte = top - ltca.rotation
+        contact = _Contact(peak.te, lte[1], tca, peak, central(jnp.where(jnp.isfinite(te), te, 0.0)), central(lte))
+        return contact, (j, solved)
     spacing = ctx.pair.face_width / acc.face_slices
     peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
                      spacing)
-    return (peak.te, ltca.transmission_error[0], tca, peak), (j, ltca.converged[0])
+    _, q_arm = moment_arms(peak.pinion_point, peak.normal, ctx.pair.center(1))
+    touching = jnp.isfinite(peak.te)
+    te_slope = jnp.where(touching, safe_divide(jnp.dot(peak.relative_velocity, peak.normal), q_arm), 0.0)
+    lte = ltca.transmission_error
+    return _Contact(peak.te, lte[1], tca, peak, te_slope, central(lte)), (j, solved)
 
 
-def point_peak(tca: TCAResult, column) -> tuple[FacePeak, Scalar]:
-    """The point contact of pair `column` at the TCA's single position, located between the
-    face slices as the point-contact LTCA locates it (`closest_contact`: the parabola's
-    peak; points, normal and velocity interpolated linearly between the two slices around
-    it), and the largest located peak of all pairs, the rigid TE the loaded contact's lag
-    counts from (rad): `(peak, top)`. The peak's value is `-inf` where the pair does not
-    touch."""
+def point_peak(tca: TCAResult, column) -> tuple[FacePeak, Array, Array]:
+    """The point contact of pair `column` at the TCA's middle position (of three), located
+    between the face slices as the point-contact LTCA locates it (`closest_contact`: the
+    parabola's peak; points, normal and velocity interpolated linearly between the slices
+    around it): `(peak, te, top)`, with the pair's located peak value `te` (`-inf` where it
+    does not touch) and the largest of all pairs `top` at every position (rad; the rigid
+    TE the loaded contact's lag counts from)."""
     located = closest_contact(tca)
-    start, other, weight = (x[0, column] for x in located["between"])
-    touching = jnp.isfinite(located["gap"][0])
+    middle = 1
+    start, other, weight = (x[middle, column] for x in located["between"])
+    touching = jnp.isfinite(located["gap"])
 
     def at(field):
-        return (1.0 - weight) * field[0, column, start] + weight * field[0, column, other]
+        return (1.0 - weight) * field[middle, column, start] + weight * field[middle, column, other]
 
-    nearest = located["slice"][0, column]
-    kind = jax.tree_util.tree_map(lambda x: x[0, column, nearest], tca.kind)
+    nearest = located["slice"][middle, column]
+    kind = jax.tree_util.tree_map(lambda x: x[middle, column, nearest], tca.kind)
     contact = SliceContact(
-        offset=located["te"][0, column],
-        pinion_parameter=located["u1"][0, column],
-        gear_parameter=located["u2"][0, column],
+        offset=located["te"][middle, column],
+        pinion_parameter=located["u1"][middle, column],
+        gear_parameter=located["u2"][middle, column],
         kind=kind_index(kind),
-        valid=touching[column],
-        unconverged=tca.unconverged[0, column, nearest],
+        valid=touching[middle, column],
+        unconverged=tca.unconverged[middle, column, nearest],
     )
-    te = jnp.where(touching[column], located["te"][0, column], -jnp.inf)
-    peak = FacePeak(located["z"][0, column], te, contact, at(tca.pinion_point), at(tca.gear_point),
-                    located["normal"][0, column], at(tca.relative_velocity))
-    return peak, jnp.max(jnp.where(touching, located["te"][0], -jnp.inf))
-
-
-def _with_rates(ctx: SearchContext, column, phi1):
-    """`evaluate` and, in the same forward-mode pass, the rates of both offsets along
-    $\\varphi_1$: `(contact, (j, solved))`."""
-    (te, lte, tca, peak), (dte, dlte, _, _), aux = jax.jvp(
-        lambda p: evaluate(ctx, column, p), (phi1,), (jnp.ones_like(phi1),), has_aux=True
-    )
-    return _Contact(te, lte, tca, peak, dte, dlte), aux
+    te = jnp.where(touching[:, column], located["te"][:, column], -jnp.inf)
+    peak = FacePeak(located["z"][middle, column], te[middle], contact, at(tca.pinion_point), at(tca.gear_point),
+                    located["normal"][middle, column], at(tca.relative_velocity))
+    return peak, te, jnp.max(jnp.where(touching, located["te"], -jnp.inf), axis=-1)
 
 
 class _Search(eqx.Module):
@@ -242,13 +268,13 @@ def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, foun
     )
     atol, rtol, tiny = _tolerances(ctx, lower.dtype)
     # One trace of the evaluation serves the loop body and the shape of its carry.
-    evaluate = eqx.filter_closure_convert(lambda p: _with_rates(ctx, column, p), lower)
+    evaluate_at = eqx.filter_closure_convert(lambda p: evaluate(ctx, column, p), lower)
     width = upper - lower
     start = lower - safe_divide(gap_lower * width, gap_upper - gap_lower, 0.5 * width)
     margin = width / 64
     start = jnp.where(jnp.isfinite(start), jnp.clip(start, lower + margin, upper - margin), lower + 0.5 * width)
     contact, (j, solved) = jax.tree_util.tree_map(
-        lambda s: jnp.zeros(s.shape, s.dtype) if isinstance(s, jax.ShapeDtypeStruct) else s, evaluate.out_struct
+        lambda s: jnp.zeros(s.shape, s.dtype) if isinstance(s, jax.ShapeDtypeStruct) else s, evaluate_at.out_struct
     )
     zero = jnp.zeros((), jnp.int32)
     initial = _SearchState(
@@ -263,7 +289,7 @@ def _search(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper, foun
 
     def body(state: _SearchState):
         x = state.point
-        contact, (j, solved) = evaluate(x)
+        contact, (j, solved) = evaluate_at(x)
         h, dh = contact.gap, contact.gap_slope
         below = h < 0
         # A checked end of the wrong sign: the crossing lies beyond it, so the bracket
@@ -307,8 +333,8 @@ def first_contact(ctx: SearchContext, column, lower, upper, gap_lower, gap_upper
     Differentiating evaluates the contact once more at $\\varphi_1^*$: with
     $\\dot H_\\theta$ the change of $H$ along the parameters' tangent at fixed angle,
     $\\dot\\varphi_1^* = -\\dot H_\\theta / H'$ (zero where $H' = 0$: tangential engagement of
-    unloaded perfect flanks), and every output $Q$ (the rates included, so second
-    derivatives along $\\varphi_1$ enter) changes by $\\dot Q_\\theta + Q'\\dot\\varphi_1^*$, one
+    unloaded perfect flanks), and every output $Q$ (the rates included, so their change
+    along $\\varphi_1$ enters) changes by $\\dot Q_\\theta + Q'\\dot\\varphi_1^*$, one
     forward-mode pass along $(\\dot\\theta, \\dot\\varphi_1^*)$. The bracket does not
     change the root, so its tangents are ignored. First order only.
     """
@@ -328,18 +354,13 @@ def _first_contact_jvp(primals, tangents):
         is_leaf=lambda v: v is None,
     )
 
-    def gap(d):
-        (te, lte, _, _), _ = evaluate(eqx.combine(d, static), column, root)
-        return te - lte
+    def contact_at(d, p):
+        return evaluate(eqx.combine(d, static), column, p)[0]
 
-    _, gap_tangent = jax.jvp(gap, (diff,), (d_ctx,))
+    _, gap_tangent = jax.jvp(lambda d: contact_at(d, root).gap, (diff,), (d_ctx,))
     _, _, tiny = _tolerances(ctx, root.dtype)
     slope = search.contact.gap_slope
     d_root = -jnp.where(jnp.abs(slope) > tiny, safe_divide(gap_tangent, slope), 0.0)
-
-    def contact_at(d, p):
-        return _with_rates(eqx.combine(d, static), column, p)[0]
-
     _, d_contact = jax.jvp(contact_at, (diff, root), (d_ctx, d_root))
     d_contact = jax.tree_util.tree_map(
         lambda t, x: t if eqx.is_inexact_array(x) else None, d_contact, search.contact

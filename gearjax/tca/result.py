@@ -97,11 +97,26 @@ class TCAResult(eqx.Module):
         """Slices whose separation is below `tolerance` (mm): the contact lines."""
         return self.valid & (self.separation <= tolerance)
 
+    def position(self, index: int) -> TCAResult:
+        """The result at grid position `index` alone (a position axis of length 1)."""
+        def fields(r):
+            return [getattr(r, name) for name in _PER_POSITION]
+
+        taken = [jax.tree_util.tree_map(lambda x: x[index:index + 1], x) for x in fields(self)]
+        one = eqx.tree_at(fields, self, taken)
+        return eqx.tree_at(lambda r: r.result, one, _tca_result(one.unconverged))
+
     @property
     def kind_name(self):
         """Names of `kind` ("flank", "gear_tip_edge", "pinion_tip_edge"), an array of
         str of shape (pos, pair, slice); needs a concrete result."""
         return enum_name(self.kind)
+
+
+#: the fields of `TCAResult` with a leading position axis
+_PER_POSITION = ("pinion_angle", "transmission_error", "slice_te", "valid", "kind", "pinion_parameter", "gear_parameter",
+                 "pinion_point", "gear_point", "normal", "relative_velocity", "separation",
+                 "transverse_normal_fraction", "unconverged")
 
 
 def _tca_result(unconverged) -> RESULTS:
