@@ -57,7 +57,8 @@ def impact_grid():
 
 def test_impact_sweep_equals_single_runs_and_follows_the_speed_law(impact_grid):
     """Torque × speed grid in one call: every grid point equals `simulate` of the same scene
-    at that operating point (1e-9), surface contact at 400 N·m and edge contact from
+    at that operating point (1e-9; the strike's velocity, force and approach 1e-7, see
+    below), surface contact at 400 N·m and edge contact from
     600 N·m for the paper optimum (its transition is at ~570 N·m at 'fast'); and from the grid alone, the force at twice the speed is
     $2^{2n/(n+1)}$ times the force (energy method, $F \\propto v^{2n/(n+1)}$) at every load."""
     scene, sweep = impact_grid
@@ -71,9 +72,12 @@ def test_impact_sweep_equals_single_runs_and_follows_the_speed_law(impact_grid):
         for j, n in enumerate(GRID[1]):
             at = eqx.tree_at(lambda s: s.operating, scene, OperatingPoint(torque_Nm=t, speed_rpm=n))
             single = simulate(at).impact
-            for field in ("force", "velocity", "pinion_angle", "approach"):
+            # The velocity holds the loaded TE's rate, a central difference at h ~ 1e-6 rad
+            # (decision 0015): the two programs round the loaded TE apart by ~1e-17 rad, so
+            # the rate by ~1e-7 of itself and v_n, F_s and the approach by up to ~1e-8.
+            for field, rtol in (("force", 1e-7), ("velocity", 1e-7), ("pinion_angle", 1e-9), ("approach", 1e-7)):
                 np.testing.assert_allclose(float(getattr(impact, field)[i, j]), float(getattr(single, field)),
-                                           rtol=1e-9, err_msg=f"{field} at {t} N·m, {n} rpm")
+                                           rtol=rtol, err_msg=f"{field} at {t} N·m, {n} rpm")
             np.testing.assert_allclose(np.asarray(impact.pinion_point[i, j]), np.asarray(single.pinion_point), rtol=1e-9)
         exponent = float(impact.stiffness.exponent[i, 0])
         assert float(impact.force[i, 1] / impact.force[i, 0]) == pytest.approx(2.0 ** (2 * exponent / (exponent + 1)), rel=1e-9)

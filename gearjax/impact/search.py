@@ -89,9 +89,8 @@ class SearchContext(eqx.Module):
 
 
 class _Contact(eqx.Module):
-    """The incoming pair $k$ at one pinion angle: its rigid offset $\\max_z\\Delta_k$ (`te`),
-    the loaded TE of the other pairs (`lte`), the TCA at that angle, the first touching
-    point along the face (`peak`), and the rates of both offsets along $\\varphi_1$."""
+    """Pair $k$ at one pinion angle: its rigid offset $\\max_z\\Delta_k$ (`te`), the others' loaded
+    TE (`lte`), the TCA, the first touching point (`peak`), both offsets' rates along $\\varphi_1$."""
 
     te: Scalar
     lte: Scalar
@@ -112,10 +111,9 @@ class _Contact(eqx.Module):
 
 
 def rate_step(pair, dtype):
-    """Step $h$ (rad) of the central difference that gives $\\mathrm{LTE}_{\\neg k}'$:
-    $\\epsilon^{1/3}$ of the pinion's angular pitch (1.3e-6 rad on seed 001's pair in
-    float64), where the difference's truncation ($h^2$) and rounding ($\\epsilon/h$) errors
-    balance."""
+    """Step $h$ (rad) of the central difference that gives $\\mathrm{LTE}_{\\neg k}'$: $\\epsilon^{1/3}$
+    of the pinion's angular pitch (1.3e-6 rad, seed 001 pair, float64), where truncation and
+    rounding balance."""
     return float(jnp.finfo(dtype).eps) ** (1.0 / 3.0) * pair.angular_pitch(0)
 
 
@@ -124,15 +122,15 @@ def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
     pairs, with the rates of both along $\\varphi_1$: `(contact, (j, solved))`, $j$ the
     pair's best slice.
 
-    TCA and LTCA run at $\\varphi_1$ and $\\varphi_1 \\pm h$ (`rate_step`) in one call (a
-    position axis of three, so they are traced once): $\\mathrm{LTE}_{\\neg k}'$ is the
-    central difference of the loaded TE there. The incoming pair's first touching point
-    along the face at $\\varphi_1$ is `face_peak` (continuous in $z$ around the best slice;
-    for point-contact flanks `point_peak`, where the loaded contact puts it), and its rate
-    is that of the touching offset at a fixed material point (envelope theorem):
-    $\\Delta_k' = \\mathbf v^{(12)}_0\\cdot\\mathbf n / q$, the normal relative velocity per
-    unit pinion speed over the gear's arm (for point contacts, whose peak is interpolated
-    between slices, the central difference of the located peaks)."""
+    TCA and LTCA run at $\\varphi_1$ and $\\varphi_1 \\pm h$ (`rate_step`) in one call, traced
+    once: $\\mathrm{LTE}_{\\neg k}'$ is the central difference of the loaded TE there. The
+    incoming pair's first touching point along the face at $\\varphi_1$ is `face_peak`
+    (continuous in $z$ around the best slice; for point-contact flanks `point_peak`, where
+    the loaded contact puts it), and its rate is that of the touching offset at a fixed
+    material point (envelope theorem): $\\Delta_k' = \\mathbf v^{(12)}_0\\cdot\\mathbf n / q$,
+    the normal relative velocity per unit pinion speed over the gear's arm (for point
+    contacts, whose peak is interpolated between slices, the central difference of the
+    located peaks, one-sided where the pair touches on one side only)."""
     acc = ctx.model.accuracy
     h = rate_step(ctx.pair, jnp.result_type(phi1))
     # The TCA's TE is only the reference the loaded TE counts from, so it is not refined
@@ -145,8 +143,10 @@ def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
     tca = grid.position(1)
     solved = jnp.all(ltca.converged)
 
-    def central(values):
-        return (values[2] - values[0]) / (2.0 * h)
+    def central(values, valid=(True, True, True)):
+        # one-sided where a neighbour has no value (a contact that starts or ends there)
+        one_sided = jnp.where(valid[2], values[2] - values[1], jnp.where(valid[0], values[1] - values[0], 0.0)) / h
+        return jnp.where(valid[0] & valid[2], (values[2] - values[0]) / (2.0 * h), one_sided)
 
     offsets = jnp.where(tca.valid[0, column], tca.slice_te[0, column], -jnp.inf)
     j = jnp.argmax(offsets)
@@ -154,7 +154,8 @@ def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
         peak, te, top = point_peak(grid, column)
         # the loaded pairs' contacts sit at the rigid TE of the located peaks, less the lag
         lte = top - ltca.rotation
-        contact = _Contact(peak.te, lte[1], tca, peak, central(jnp.where(jnp.isfinite(te), te, 0.0)), central(lte))
+        located = jnp.isfinite(te)
+        contact = _Contact(peak.te, lte[1], tca, peak, central(jnp.where(located, te, 0.0), located), central(lte))
         return contact, (j, solved)
     spacing = ctx.pair.face_width / acc.face_slices
     peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
