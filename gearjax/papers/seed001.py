@@ -84,7 +84,7 @@ def reproduce(accuracy: str | Accuracy = "reference", check_slices: int = 0,
     acc = accuracy if isinstance(accuracy, Accuracy) else Accuracy.from_spec(accuracy)
     paper = paper_optimum().as_vector()
     plain = paper.at[jnp.array([0, 1, 4])].set(0.0)
-    run = functools.partial(_strike, accuracy=acc)
+    run = functools.partial(_strike, seed_pair(), accuracy=acc)
     table = []
     for torque, (paper_standard, paper_modified) in TABLE4_IMPACT_FORCE.items():
         table.append({"torque_Nm": torque, "paper_standard_N": paper_standard, "standard": run(plain, torque),
@@ -93,7 +93,7 @@ def reproduce(accuracy: str | Accuracy = "reference", check_slices: int = 0,
     trajectory = {"standard": [run(plain, t) for t in loads], "modified": [run(paper, t) for t in loads]}
     bracket = None
     if transition:
-        below, above = regime_transition(_scene(paper, 400.0, accuracy=acc), low_Nm=400.0, high_Nm=1600.0,
+        below, above = regime_transition(_scene(seed_pair(), paper, 400.0, accuracy=acc), low_Nm=400.0, high_Nm=1600.0,
                                          tolerance=1e-3)
         bracket = [float(below) / 1e3, float(above) / 1e3]
     slow, quick = run(paper, 1000.0, 2500.0), run(paper, 1000.0, 5000.0)
@@ -115,20 +115,20 @@ def reproduce(accuracy: str | Accuracy = "reference", check_slices: int = 0,
     }
 
 
-def _scene(y, torque_Nm, rpm=SEED_001_CASE["speed_rpm"], *, accuracy: Accuracy):
+def _scene(pair, y, torque_Nm, rpm=SEED_001_CASE["speed_rpm"], *, accuracy: Accuracy):
     from ..operating import OperatingPoint
     from ..scene import Scene
 
-    return Scene(seed_pair(), FlankModification.from_vector(y), effects=("impact",), accuracy=accuracy,
+    return Scene(pair, FlankModification.from_vector(y), effects=("impact",), accuracy=accuracy,
                  operating=OperatingPoint(torque_Nm=torque_Nm, speed_rpm=rpm), pairs=REPRODUCTION_PAIRS)
 
 
-def _strike(y, torque_Nm, rpm=SEED_001_CASE["speed_rpm"], *, accuracy: Accuracy) -> dict:
-    """The impact of design `y` (engine units) at one operating point, as plain numbers."""
+def _strike(pair, y, torque_Nm, rpm=SEED_001_CASE["speed_rpm"], *, accuracy: Accuracy) -> dict:
+    """The impact of design `y` (engine units) of `pair` at one operating point, as plain numbers."""
     from .._solution import RESULTS
     from ..pipeline import simulate
 
-    impact = simulate(_scene(y, torque_Nm, rpm, accuracy=accuracy), throw=False).impact
+    impact = simulate(_scene(pair, y, torque_Nm, rpm, accuracy=accuracy), throw=False).impact
     return {
         "torque_Nm": torque_Nm,
         "speed_rpm": rpm,
@@ -141,7 +141,7 @@ def _strike(y, torque_Nm, rpm=SEED_001_CASE["speed_rpm"], *, accuracy: Accuracy)
         "stiffness_exponent": float(impact.stiffness.exponent),
         "fit_error": float(impact.stiffness.fit_error),
         "equivalent_mass_kg": float(impact.mass) * 1e3,
-        "loaded_te_um": float(impact.loaded_te) * float(seed_pair().base_radius[1]) * 1e3,
+        "loaded_te_um": float(impact.loaded_te) * float(pair.base_radius[1]) * 1e3,
         "converged": bool(impact.result == RESULTS.successful),
     }
 
@@ -152,7 +152,7 @@ def _check(table: list[dict], designs: dict, finer: Accuracy) -> dict:
     differences, regimes_equal = [], True
     for row in table:
         for name, y in designs.items():
-            other = _strike(y, row["torque_Nm"], accuracy=finer)
+            other = _strike(seed_pair(), y, row["torque_Nm"], accuracy=finer)
             row[name]["force_N_at_check"] = other["force_N"]
             row[name]["converged_at_check"] = other["converged"]
             differences.append(abs(row[name]["force_N"] / other["force_N"] - 1.0))
