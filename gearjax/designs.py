@@ -26,8 +26,7 @@ import numpy as np
 
 from .geometry.errors import MeshErrors
 from .geometry.modification import FlankModification
-from .runtime.resources import check_memory
-from .pipeline import STAGES, SimulationResult, check_codes, in_precision, precision, prepare, run
+from .pipeline import STAGES, SimulationResult, check_codes, in_precision, launched, run
 from .scene import Scene, check_modification_fits
 
 #: The batched parts of a scene, by `simulate_designs` keyword.
@@ -101,11 +100,8 @@ def simulate_designs(
     for gear, field in ((0, "modification"), (1, "gear_modification")):
         if field in batch:
             check_modification_fits(scene.pair, batch[field], gear, f"{field}s", _relief_coordinates)
-    check_memory(scene, what="simulate_designs", batch=min(count, batch_size or count))
-    scene = prepare(scene)
-    batch = in_precision(batch, scene.accuracy)
-    with precision(scene.accuracy):
-        out, codes = _simulate_designs(scene, batch, outputs, batch_size)
+    with launched(scene, what="simulate_designs", batch=min(count, batch_size or count)) as prepared:
+        out, codes = _simulate_designs(prepared, in_precision(batch, prepared.accuracy), outputs, batch_size)
     if throw:
         check_codes(codes)
     return out

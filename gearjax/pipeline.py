@@ -21,12 +21,15 @@ concrete inputs the checks always pass (the constructors ran them).
 Each stage runs inside `jax.named_scope("stage_<name>")` and each flank term inside
 `"term_<name>"`, so the lowered program can be inspected (`program_text`).
 
-Host-side helpers: `prepare` (precision check and casts, before tracing) and
-`check_results` / `check_codes` (raise `SimulationError` for failed stages once results are
-concrete).
+Host-side helpers: `launched` (the set-up every entry that calls a compiled program shares:
+the memory guard, `prepare`'s precision check and casts, the precision the program is
+traced in) and `check_results` / `check_codes` (raise `SimulationError` for failed stages
+once results are concrete).
 """
 
 from __future__ import annotations
+
+import contextlib
 
 import equinox as eqx
 import jax
@@ -173,6 +176,11 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
     Python) a top-level call loads the traced program of a scene of the same structure
     from disk instead of tracing it again.
 
+    Many designs of one pair: `simulate_designs` (the pair resolved once, only the outputs
+    asked for computed). `jax.jit(jax.vmap(simulate))` over `stack_scenes` works too (a copy
+    of the pair per design); return only what you read from it, e.g.
+    `lambda s: jax.vmap(simulate)(s).tca.transmission_error`, and XLA drops the rest.
+
     Args:
         scene: the `Scene`.
         throw: check the results once they are concrete: a failed LTCA or impact stage
@@ -191,10 +199,8 @@ def simulate(scene: Scene, *, throw: bool = True) -> SimulationResult:
             program's estimated memory exceeds what the device has
             (`gearjax.runtime.resources`); it names the knobs and the face-slice count that fits.
     """
-    check_memory(scene)
-    scene = prepare(scene)
-    with precision(scene.accuracy):
-        result = cached_call(simulate_program, scene, name="simulate")
+    with launched(scene) as prepared:
+        result = cached_call(simulate_program, prepared, name="simulate")
     if throw:
         check_results(result)
     return result
@@ -209,6 +215,24 @@ def program_text(scene: Scene) -> str:
     which the named scopes of the stages and flank terms appear."""
     lowered = simulate_program.lower(prepare(scene)).lowered
     return lowered.compiler_ir().operation.get_asm(enable_debug_info=True)
+
+
+@contextlib.contextmanager
+def launched(scene: Scene, *, what: str = "simulate", loads: int = 1, batch: int = 1):
+    """The set-up shared by every host entry that calls a compiled program of the chain
+    (`simulate`, `simulate_designs`, the sweeps, `regime_transition`), before anything is
+    traced: the memory guard for `loads` loads and `batch` designs computed at once
+    (`check_memory`; `what` names the entry in its error), the precision check and casts
+    (`prepare`), and the precision the program is traced in (`precision`). Yields the
+    prepared scene::
+
+        with launched(scene, what="load_sweep", loads=len(torques)) as prepared:
+            sweep = _load_sweep(prepared, torques)
+    """
+    check_memory(scene, loads=loads, what=what, batch=batch)
+    prepared = prepare(scene)
+    with precision(prepared.accuracy):
+        yield prepared
 
 
 def prepare(scene: Scene) -> Scene:
@@ -245,8 +269,6 @@ def in_precision(tree, accuracy: Accuracy):
 def precision(accuracy: Accuracy):
     """A context in which programs of this accuracy are traced: 64-bit types off for
     float32 (so every constant follows the requested precision), nothing for float64."""
-    import contextlib
-
     return jax.enable_x64(False) if accuracy.dtype == "float32" else contextlib.nullcontext()
 
 

@@ -7,9 +7,14 @@ import dataclasses
 import numpy as np
 import pytest
 
+import gearjax.designs
 import gearjax.pipeline
+import gearjax.sweep.designs
 import gearjax.sweep.loads
-from gearjax import Accuracy, OperatingPoint, Scene, simulate
+import gearjax.sweep.transition
+from gearjax import Accuracy, OperatingPoint, Scene, design_sweep, impact_sweep, regime_transition, simulate, simulate_designs
+from gearjax.geometry.modification import FlankModification
+from gearjax.optimize import Objective
 from gearjax.cli import main
 from gearjax.papers.seed001 import paper_optimum
 from gearjax.runtime.resources import MemoryEstimateError, check_memory, estimate_bytes
@@ -45,6 +50,30 @@ def test_a_scene_that_cannot_fit_is_refused_before_compiling(seed_pair, no_compu
     check_memory(scene)
     with pytest.raises(MemoryEstimateError, match="for 64 loads at once"):
         load_sweep(scene, torques_Nm=np.linspace(0.0, 1000.0, 64))
+
+
+@pytest.mark.parametrize("entry", ["simulate_designs", "impact_sweep", "design_sweep", "regime_transition",
+                                   "objective"])
+def test_every_entry_refuses_a_scene_that_cannot_fit_before_compiling(entry, seed_pair, forbid, monkeypatch):
+    """The entries that run many designs or loads share `simulate`'s set-up (`launched`):
+    each names itself and the knobs, and compiles nothing."""
+    forbid(gearjax.designs, "_simulate_designs")
+    forbid(gearjax.sweep.loads, "_impact_sweep")
+    forbid(gearjax.sweep.designs, "_design_rows")
+    forbid(gearjax.sweep.transition, "_transition")
+    monkeypatch.setenv("GEARJAX_MEMORY_LIMIT_GB", "20")
+    big = Scene(seed_pair, paper_optimum(), operating=OperatingPoint(torque_Nm=1000.0, speed_rpm=5000.0),
+                effects=("impact",), accuracy=Accuracy(face_slices=3000))
+    calls = {
+        "simulate_designs": lambda: simulate_designs(big, [paper_optimum(), FlankModification()]),
+        "impact_sweep": lambda: impact_sweep(big, torques_Nm=[500.0, 1000.0], speeds_rpm=[5000.0]),
+        "design_sweep": lambda: design_sweep([big, big], torques_Nm=[1000.0]),
+        "regime_transition": lambda: regime_transition(big, low_Nm=100.0, high_Nm=2000.0),
+        "objective": lambda: Objective.create(big, torques_Nm=[400.0, 1000.0, 1600.0]),
+    }
+    name = "the objective" if entry == "objective" else entry
+    with pytest.raises(MemoryEstimateError, match=rf"{name}.*face_slices = 3000"):
+        calls[entry]()
 
 
 def test_cli_run_refuses_the_scene_with_status_2(tmp_path, capsys, monkeypatch):

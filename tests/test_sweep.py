@@ -226,7 +226,9 @@ def test_cli_sweep_killed_between_chunks_resumes_to_the_uninterrupted_result(imp
     written = json.loads((out / "sweep.json").read_text())["sweep"]
     assert [json.loads(x)["step"] for x in (out / "history.jsonl").read_text().splitlines()] == [1, 2, 3]
     assert written["chunks"] == 3 and written["chunk_length"] == 3 and written["torque_Nm"] == GRID[0]
-    np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-10)
+    # chunks of 3 loads against one program of 7: the strike's force at the cross-program
+    # tolerance of the first-contact search's rates (decision 0015; 8.4e-10 seen)
+    np.testing.assert_allclose(written["impact_force_N"], np.asarray(sweep.impact.force), rtol=1e-7)
     np.testing.assert_allclose(printed["impact_force_N"], written["impact_force_N"], rtol=0)
     np.testing.assert_allclose(written["lte_peak_to_peak_um"], np.asarray(sweep.ltca.lte_peak_to_peak_line) * 1e3,
                                rtol=1e-10)

@@ -9,8 +9,7 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike
 from ..impact import ImpactResult
 from ..ltca import LTCAResult
-from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
-from ..runtime.resources import check_memory
+from ..pipeline import SimulationResult, check_results, launched, over_loads
 from ..scene import Scene, check_loaded_accuracy, check_one_zone, stack_scenes
 from ..units import rad_per_s_to_rpm
 from ._axes import _speeds, _torques
@@ -98,11 +97,9 @@ def design_sweep(
         check_one_zone(stacked, "design_sweep with speeds")
     devices = _devices(devices)
     check_loaded_accuracy(stacked.compliance, stacked.accuracy)
-    check_memory(stacked, loads=torques.shape[0], what="design_sweep")
-    stacked = prepare(stacked)
-    arrays, static = eqx.partition(stacked, eqx.is_array)
-    count = jax.tree_util.tree_leaves(arrays)[0].shape[0]
-    with precision(stacked.accuracy):
+    with launched(stacked, what="design_sweep", loads=torques.shape[0]) as stacked:
+        arrays, static = eqx.partition(stacked, eqx.is_array)
+        count = jax.tree_util.tree_leaves(arrays)[0].shape[0]
         dtype = jnp.result_type(float)
         torques = torques.astype(dtype)
         speeds = None if speeds is None else speeds.astype(dtype)

@@ -10,8 +10,7 @@ import jax.numpy as jnp
 from .._custom_types import ArrayLike
 from ..impact import ImpactResult
 from ..ltca import LTCAResult
-from ..pipeline import SimulationResult, check_results, over_loads, precision, prepare
-from ..runtime.resources import check_memory
+from ..pipeline import SimulationResult, check_results, launched, over_loads
 from ..scene import Scene, check_loaded_accuracy, check_one_zone
 from ..tca import TCAResult
 from ..units import rad_per_s_to_rpm
@@ -53,10 +52,8 @@ def load_sweep(scene: Scene, torques: ArrayLike | None = None, *, torques_Nm: Ar
     """
     torques = _torques(torques, torques_Nm)
     check_loaded_accuracy(scene.compliance, scene.accuracy)
-    check_memory(scene, loads=torques.shape[0], what="load_sweep")
-    scene = prepare(scene)
-    with precision(scene.accuracy):
-        return _load_sweep(scene, torques.astype(jnp.result_type(float)))
+    with launched(scene, what="load_sweep", loads=torques.shape[0]) as prepared:
+        return _load_sweep(prepared, torques.astype(jnp.result_type(float)))
 
 
 @eqx.filter_jit
@@ -134,10 +131,9 @@ def impact_sweep(
         raise ValueError("impact_sweep needs a scene with effects including 'impact' (and so a torque)")
     check_one_zone(scene, "impact_sweep")
     devices = _devices(devices)
-    check_memory(scene, loads=-(-torques.shape[0] // (1 if devices is None else len(devices))), what="impact_sweep")
-    scene = prepare(scene)
     count = torques.shape[0]
-    with precision(scene.accuracy):
+    per_device = -(-count // (1 if devices is None else len(devices)))
+    with launched(scene, what="impact_sweep", loads=per_device) as scene:
         dtype = jnp.result_type(float)
         torques, speeds = torques.astype(dtype), speeds.astype(dtype)
         if devices is None:

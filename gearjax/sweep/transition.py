@@ -12,7 +12,7 @@ from .. import pipeline
 from .._solution import RESULTS, SimulationError, enum_name
 from .._validate import check_range
 from ..impact import ImpactRegime
-from ..pipeline import precision, prepare
+from ..pipeline import launched
 from ..scene import Scene, check_one_zone, stack_scenes
 from ._axes import _one_of
 
@@ -76,9 +76,9 @@ def regime_transition(
         raise ValueError("regime_transition needs a scene with effects including 'impact'")
     for sc in scenes:
         check_one_zone(sc, "regime_transition")
-    stacked = prepare(stack_scenes(scenes))
-    arrays, static = eqx.partition(stacked, eqx.is_array)
-    with precision(stacked.accuracy):
+    # the designs run one after another (`lax.map`), each over one load at a time
+    with launched(stack_scenes(scenes), what="regime_transition") as stacked:
+        arrays, static = eqx.partition(stacked, eqx.is_array)
         dtype = jnp.result_type(float)
         search = _transition(arrays, static, jnp.asarray(low, dtype), jnp.asarray(high, dtype),
                              jnp.asarray(tolerance, dtype))
