@@ -19,7 +19,11 @@ import pytest
 
 import gearjax as gj
 from gearjax import optimize as go
-from gearjax.optimize.batch import batch_objective as _batch_objective, batch_value_and_grad as _batch_value_and_grad
+from gearjax.optimize.batch import (
+    batch_evaluation as _batch_evaluation,
+    batch_objective as _batch_objective,
+    batch_value_and_grad as _batch_value_and_grad,
+)
 from gearjax.papers.seed001 import paper_optimum
 
 POPULATION = 12
@@ -326,6 +330,50 @@ def test_sensitivities_agree_with_the_energy_method_the_descent_gradient_and_dif
             go.sensitivities(objective, bad, space)
 
 
+def test_every_quantity_is_simulates_and_aggregates_from_one_evaluation(objective, scene, designs, batch_values):
+    """The batch program returns the whole `Evaluation`: J, and the loaded TE peak-to-peak
+    (µm), the largest pressure and the mean mesh stiffness (maximised: J holds its
+    negative) of `simulate` at the same design, each the objective of an `Objective` of
+    that quantity."""
+    evaluation = _batch_evaluation(objective, designs)
+    np.testing.assert_array_equal(np.asarray(evaluation.objective), batch_values)
+    ltca = _simulate(objective, designs[0]).ltca
+    expected = {"lte": 1e3 * float(ltca.lte_peak_to_peak_line), "pressure": float(jnp.max(ltca.pressure)),
+                "stiffness": -float(ltca.mean_mesh_stiffness), "force": float(batch_values[0])}
+    for name, value in expected.items():
+        other = go.Objective.create(scene, quantity=name)
+        assert float(other.aggregated(evaluation)[0]) == pytest.approx(value, rel=1e-8), name
+        assert float(objective.aggregated(evaluation, name)[0]) == pytest.approx(value, rel=1e-8), name
+    assert 0.5 < expected["lte"] < 20.0 and 500.0 < expected["pressure"] < 3000.0 and expected["stiffness"] < -5.0
+
+
+def test_a_duty_cycle_weights_its_loads_by_time_share_or_takes_the_worst_one(scene):
+    """Aggregation over three loads of a hand-made evaluation (two error samples): the
+    time-weighted mean of the samples' means, the worst case, and +inf if an entry failed."""
+    force = jnp.array([[1000.0, 1200.0], [1500.0, 1500.0], [2000.0, 2400.0]])
+    zeros = jnp.zeros_like(force)
+    evaluation = go.Evaluation(jnp.zeros(()), force, force, zeros, zeros, zeros, zeros, zeros, jnp.asarray(0))
+    shares = go.Objective.create(scene, torques_Nm=[400.0, 1000.0, 1600.0], weights=[2.0, 1.0, 1.0])
+    assert float(shares.value(evaluation)) == pytest.approx(0.5 * 1100.0 + 0.25 * 1500.0 + 0.25 * 2200.0, rel=1e-14)
+    worst = go.Objective.create(scene, torques_Nm=[400.0, 1000.0, 1600.0], aggregate="max")
+    assert float(worst.value(evaluation)) == 2200.0
+    failed = eqx.tree_at(lambda e: e.failed, evaluation, jnp.asarray(1))
+    assert float(shares.value(failed)) == np.inf
+
+
+def test_each_load_runs_at_its_own_speed(objective, scene, designs):
+    """A duty cycle's speed per load reaches the impact: the file's objective structure at
+    2500 rpm (its batch program) against `simulate` at that speed."""
+    slow = go.Objective.create(scene, speeds_rpm=[2500.0])
+    np.testing.assert_allclose(np.asarray(slow.speeds), [2500.0 * np.pi / 30.0], rtol=1e-15)
+    forces = np.asarray(_batch_objective(slow, designs))
+    scene_slow = objective.scene_for(designs[0], speed=2500.0 * np.pi / 30.0)
+    assert forces[0] == pytest.approx(float(gj.simulate(scene_slow).impact.force), rel=1e-8)
+    assert forces[0] < float(_batch_objective(objective, designs)[0])  # a slower strike is a softer one
+    three = go.Objective.create(scene, torques_Nm=[400.0, 1000.0, 1600.0], speeds_rpm=[3000.0])
+    np.testing.assert_array_equal(np.asarray(three.speeds), np.full(3, 3000.0 * np.pi / 30.0))
+
+
 @pytest.mark.parametrize(
     "kwargs, match",
     [
@@ -351,6 +399,9 @@ def test_bad_bounds_are_rejected(scene, kwargs, match):
         (dict(torques_Nm=[400.0, 1000.0], weights=[0.0, 0.0]), "positive"),
         (dict(quantity="energy"), "quantity"),
         (dict(aggregate="median"), "aggregate"),
+        (dict(torques_Nm=[400.0, 1000.0], speeds_rpm=[1000.0, 2000.0, 3000.0]), r"speeds_rpm must hold one .* per load \(2\)"),
+        (dict(speeds_rpm=[-5.0]), "speeds_rpm"),
+        (dict(speeds=[100.0], speeds_rpm=[1000.0]), "give the speeds once"),
     ],
 )
 def test_bad_objective_input_is_rejected(scene, kwargs, match):
@@ -382,6 +433,7 @@ def _scene_file(tmp_path, optimize: str) -> str:
         ("loads_Nm = []\n", "[optimize] loads_Nm:"),
         ("loads_Nm = [-400.0]\n", "[optimize] loads_Nm:"),
         ("loads_Nm = [400.0, 1000.0]\nload_weights = [1.0]\n", "weight"),
+        ("loads_Nm = [400.0, 1000.0]\nspeeds_rpm = [1000.0, 2000.0, 3000.0]\n", "[optimize] speeds_rpm"),
         ("population = 1\n", "[optimize] population:"),
         ("tip_relief_um = [50.0, 10.0]\n", "tip_relief"),
         ("colour = 'red'\n", "[optimize] colour:"),
@@ -531,7 +583,7 @@ def test_smoothed_descent_evaluates_every_sample_and_resumes_from_its_run_direct
     (the run's plumbing, not the gear objective's program): each iteration evaluates the
     starts' samples as one batch, the best only improves, and a finished run directory
     resumed gives the same result (its state, the random key included, loaded)."""
-    import gearjax.optimize.run as run_module
+    import gearjax.optimize.methods as methods_module
 
     batches = []
 
@@ -540,7 +592,7 @@ def test_smoothed_descent_evaluates_every_sample_and_resumes_from_its_run_direct
         batches.append(units.shape)
         return jnp.sum(jnp.square(units - 0.3), axis=-1), 2.0 * (units - 0.3)
 
-    monkeypatch.setattr(run_module, "batch_value_and_grad", bowl)
+    monkeypatch.setattr(methods_module, "batch_value_and_grad", bowl)
     cfg = go.GradientConfig(starts=2, iterations=6, smoothing=0.1, smoothing_pairs=1)
     first = go.gradient_descent(objective, space, config=cfg, seed=3, certify=None, run_dir=tmp_path / "run")
     per_design = int(objective.torques.shape[0]) * objective.samples
@@ -551,6 +603,66 @@ def test_smoothed_descent_evaluates_every_sample_and_resumes_from_its_run_direct
                                 resume=True)
     np.testing.assert_array_equal(again.best_design, first.best_design)
     assert again.history == first.history
+
+
+def test_a_registered_method_runs_through_minimize_the_settings_and_the_run_directory(objective, space, designs,
+                                                                                     batch_values, tmp_path):
+    """A method is a class and a `register`: random search over the unit cube, one batch of
+    the file's 12 designs per step (so the objective's compiled batch program is shared),
+    runs through `minimize`, is named by `[optimize] method` and in `run.json`, and a name
+    cannot be taken twice."""
+    import jax
+
+    @dataclasses.dataclass(frozen=True)
+    class RandomSearch(go.SearchMethod):
+        config: go.GAConfig = dataclasses.field(default_factory=lambda: go.GAConfig(population=POPULATION))
+        name = "random_test"
+
+        @classmethod
+        def from_settings(cls, settings):
+            return cls(go.GAConfig(population=settings.population))
+
+        steps = property(lambda self: 2)
+        batch = property(lambda self: self.config.population)
+
+        def init(self, key, starts, dtype):
+            return {"key": key, "best": jnp.full(6, 0.5, dtype), "best_value": jnp.asarray(jnp.inf, dtype)}
+
+        def step(self, objective, space, state):
+            key, draw = jax.random.split(state["key"])
+            units = jax.random.uniform(draw, (self.batch, 6), objective.torques.dtype)
+            values = _batch_objective(objective, space.to_design(units))
+            i = jnp.argmin(values)
+            better = values[i] < state["best_value"]
+            best = jnp.where(better, units[i], state["best"])
+            return ({"key": key, "best": best, "best_value": jnp.minimum(values[i], state["best_value"])},
+                    space.to_design(units), values)
+
+        def best(self, state):
+            return state["best_value"], state["best"]
+
+        def candidates(self, state):
+            return np.asarray(state["best"])[None], np.asarray(state["best_value"])[None]
+
+    go.register(RandomSearch)
+    try:
+        with pytest.raises(ValueError, match="registered already"):
+            go.register(type("Other", (RandomSearch,), {"name": "random_test"}))
+        settings = go.OptimizeSettings.from_dict({"method": "random_test", "population": POPULATION})
+        method = settings.search_method()
+        assert isinstance(method, RandomSearch) and method.batch == POPULATION
+        result = go.minimize(objective, space, method, seed=1, certify=None, run_dir=tmp_path / "run")
+    finally:
+        go.METHODS.pop("random_test")
+    assert result.method == "random_test" and result.steps == 2 and result.gradient_evaluations == 0
+    assert result.evaluations == 2 * POPULATION
+    records = [json.loads(line) for line in (tmp_path / "run" / "history.jsonl").read_text().splitlines()]
+    assert result.best_objective == min(min(r["objective"]) for r in records)
+    assert json.loads((tmp_path / "run" / "run.json").read_text())["method"] == "random_test"
+    # the batch program is the file's: the scene's own design scores as in the batch fixture
+    assert result.initial_objective == pytest.approx(batch_values[0], rel=1e-12)
+    with pytest.raises(go.SettingsError, match="method"):
+        go.OptimizeSettings.from_dict({"method": "random_test"})
 
 
 def test_resuming_a_run_of_another_version_names_the_setting_it_lacks(tmp_path):

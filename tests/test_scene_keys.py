@@ -29,7 +29,8 @@ READERS = {
 }
 BASE = tomllib.loads(scene_file.DEFAULT_SCENE_TOML)
 #: Keys whose value is a list of numbers: how one number is written as that list.
-LISTS = {"inertia_kg_m2": lambda v: [v, v], "loads_Nm": lambda v: [v], "load_weights": lambda v: [v]}
+LISTS = {"inertia_kg_m2": lambda v: [v, v], "loads_Nm": lambda v: [v], "load_weights": lambda v: [v],
+         "speeds_rpm": lambda v: [v]}
 CASES = [(section, key) for section, keys in SECTIONS.items() for key in keys]
 
 

@@ -11,7 +11,8 @@ import numpy as np
 
 from ..optimize.certification import accuracy_name
 from ..optimize.objective import QUANTITIES
-from ..optimize.run import genetic, gradient_descent
+from ..optimize.methods import METHODS
+from ..optimize.run import minimize
 from ..optimize.settings import OptimizeSettings, SettingsError
 from ..optimize.space import design_dict
 
@@ -23,7 +24,7 @@ HELP = "tune the pinion modification for a small mesh-in impact ([optimize] sect
 def add_arguments(parser) -> None:
     parser.add_argument("scene", nargs="?",
                         help="TOML scene file with an optional [optimize] section (default: the built-in scene)")
-    parser.add_argument("--method", choices=["ga", "gradient"], help="overrides [optimize] method")
+    parser.add_argument("--method", choices=sorted(METHODS), help="overrides [optimize] method")
     parser.add_argument("--out", default="gearjax-optimize", help="run directory (default ./gearjax-optimize)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
@@ -49,14 +50,8 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
         return 2
     progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
     try:
-        if settings.method == "ga":
-            result = genetic(objective, space, config=settings.ga_config(), generations=settings.generations,
-                             seed=settings.seed, run_dir=out, resume=resume, progress=progress,
-                             certify=settings.certify, certify_top=settings.certify_top)
-        else:
-            result = gradient_descent(objective, space, config=settings.gradient_config(), seed=settings.seed,
-                                      run_dir=out, resume=resume, progress=progress, certify=settings.certify,
-                                      certify_top=settings.certify_top)
+        result = minimize(objective, space, settings.search_method(), seed=settings.seed, run_dir=out,
+                          resume=resume, progress=progress, certify=settings.certify, certify_top=settings.certify_top)
     except ValueError as err:  # e.g. a run directory that holds another run
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2

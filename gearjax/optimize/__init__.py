@@ -2,8 +2,9 @@
 
 The pipeline: a `DesignSpace` (bounds, unit-cube coordinates) → an `Objective` (a pure
 function of the design vector over a load spectrum and error samples) → an optimiser
-(`genetic`, the GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected
-Adam) that writes every step to a run directory and resumes exactly → a certification of
+(`minimize` with a registered `SearchMethod` of `gearjax.optimize.methods`: `genetic`, the
+GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected Adam) that writes
+every step to a run directory and resumes exactly → a certification of
 its best designs at a finer accuracy (`certify`), which picks the result.
 """
 
@@ -47,9 +48,15 @@ from .objective import (
 from .objective import (
     sample_errors as sample_errors,
 )
+from .methods import METHODS as METHODS
+from .methods import GeneticSearch as GeneticSearch
+from .methods import GradientSearch as GradientSearch
+from .methods import SearchMethod as SearchMethod
+from .methods import register as register
 from .run import OptimizationResult as OptimizationResult
 from .run import genetic as genetic
 from .run import gradient_descent as gradient_descent
+from .run import minimize as minimize
 from .sensitivity import sensitivities as sensitivities
 from .sensitivity import sensitivity_table as sensitivity_table
 from .settings import OptimizeSettings as OptimizeSettings

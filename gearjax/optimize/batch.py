@@ -20,6 +20,13 @@ from .space import DesignSpace
 
 def batch_objective(objective: Objective, designs):
     """$J$ of designs (mm), shape (P, 6)."""
+    return batch_evaluation(objective, designs).objective
+
+
+def batch_evaluation(objective: Objective, designs):
+    """`Objective.evaluate` of designs (mm), shape (P, 6): an `Evaluation` with a leading
+    design axis, every quantity of every load and sample (`Objective.aggregated` gives any
+    quantity's aggregate from it); the program `batch_objective` runs."""
     # A fixed dtype without weak typing, so every caller hits the same compiled program.
     return _objective_jit(objective, jnp.asarray(designs, objective.torques.dtype))
 
@@ -39,7 +46,8 @@ def batch_objective_in_chunks(objective: Objective, designs, rows: int) -> np.nd
 
 def batch_gradients(objective: Objective, designs):
     """$J$ of designs (mm), shape (K, 6), and its gradients with respect to the design (mm),
-    the loads (N·mm), the pinion speed (rad/s) and the mesh errors (mm), one program.
+    the loads (N·mm), the pinion speed at each load (rad/s) and the mesh errors (mm), one
+    program.
 
     Gradient descent and `sensitivities` share it: reverse mode costs about the same for
     the four arguments as for the design alone, and one program compiles once (minutes).
@@ -47,8 +55,7 @@ def batch_gradients(objective: Objective, designs):
     (`gearjax.runtime.cache.exclude_from_persistent_cache`).
     """
     dtype = objective.torques.dtype
-    speed = jnp.asarray(objective.scene.operating.speed, dtype)
-    return _gradients_jit(objective, jnp.asarray(designs, dtype), objective.torques, speed, objective.errors)
+    return _gradients_jit(objective, jnp.asarray(designs, dtype), objective.torques, objective.speeds, objective.errors)
 
 
 def batch_value_and_grad(objective: Objective, space: DesignSpace, units):
@@ -60,18 +67,18 @@ def batch_value_and_grad(objective: Objective, space: DesignSpace, units):
 
 @eqx.filter_jit
 def _objective_jit(objective, designs):
-    return objective.batch(designs).objective
+    return objective.batch(designs)
 
 
 @eqx.filter_jit
-def _gradients_jit(objective, designs, torques, speed, errors):
+def _gradients_jit(objective, designs, torques, speeds, errors):
     exclude_from_persistent_cache()
 
-    def J(design, torques, speed, errors):
-        o = eqx.tree_at(lambda o: (o.torques, o.scene.operating.speed, o.errors), objective, (torques, speed, errors))
+    def J(design, torques, speeds, errors):
+        o = eqx.tree_at(lambda o: (o.torques, o.speeds, o.errors), objective, (torques, speeds, errors))
         return o(design)
 
     def one(design):
-        return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speed, errors)
+        return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speeds, errors)
 
     return jax.lax.map(one, designs, batch_size=objective.batch_size)

@@ -120,15 +120,12 @@ def certify(objective: Objective, designs, values=None, *, accuracy="reference",
     return Certification(accuracy_name(target), designs, values, certified)
 
 
-def candidates(method: str, state, space, top: int) -> tuple[np.ndarray, np.ndarray]:
-    """The designs to certify (mm) and their search values, best first: the best design
-    found, then the `top` best distinct members of the GA's final population, or the
-    starts' best points."""
-    if method == "ga":
-        units = np.concatenate([np.asarray(state.best)[None], np.asarray(state.population)])
-        values = np.concatenate([np.asarray(state.best_fitness)[None], np.asarray(state.fitness)])
-    else:
-        units, values = np.asarray(state.best), np.asarray(state.best_value)
+def candidates(units, values, space, top: int) -> tuple[np.ndarray, np.ndarray]:
+    """The designs to certify (mm) and their search values, best first: of a method's
+    candidates (`SearchMethod.candidates`: unit-cube designs and their values, e.g. the best
+    design found and the GA's final population, or the starts' best points), the `top` + 1
+    best distinct ones."""
+    units, values = np.asarray(units), np.asarray(values)
     order = np.argsort(np.where(np.isfinite(values), values, np.inf), kind="stable")
     chosen: list[int] = []
     for i in order:

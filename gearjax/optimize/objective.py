@@ -1,16 +1,22 @@
 r"""The optimisation objective: a pure function of the design vector.
 
-For a design $y$ (mm, `gearjax.optimize.space`), loads $T_l$ with weights $w_l$ and
-sampled mesh errors $e_s$ ($s = 1 \dots S$), the objective is
+For a design $y$ (mm, `gearjax.optimize.space`), a duty cycle of loads $T_l$ at pinion
+speeds $\omega_l$ with time shares (weights) $w_l$, and sampled mesh errors $e_s$
+($s = 1 \dots S$), the objective is
 
-$$J(y) = \mathop{A}_{l}\Big[\frac1S\sum_s q(y, T_l, e_s)\Big] + \sum_k \mu_k
+$$J(y) = \mathop{A}_{l}\Big[\frac{\sigma}{S}\sum_s q(y, T_l, \omega_l, e_s)\Big] + \sum_k \mu_k
          \Big(\frac{p_k(y)}{p_k^\text{lim}} - 1\Big)_+^2 ,$$
 
-where $q$ is the mesh-in impact force $F_s$ (N, energy method, `gearjax.impact`) or the
-normal impact velocity $|v_n|$ (mm/s), the aggregate $A$ is the weighted mean
-$\sum_l w_l(\cdot)/\sum_l w_l$ or the maximum over the loads, and the optional penalties
-$p_k$ are the largest Hertz pressure (MPa) and the loaded TE peak-to-peak along the line
-of action (mm) over the loads and samples, with weights $\mu_k$ in the objective's unit.
+where $q$ is one of the `QUANTITIES`: the mesh-in impact force $F_s$ (N, energy method,
+`gearjax.impact`), the normal impact velocity $|v_n|$ (mm/s), the loaded TE peak-to-peak
+along the line of action (µm), the largest Hertz pressure of the cycle (MPa) or the cycle
+mean of the tangent mesh stiffness (N/(mm·µm)); $\sigma = 1$ for a quantity minimised,
+$-1$ for one maximised (the stiffness). The aggregate $A$ is the time-weighted mean
+$\sum_l w_l(\cdot)/\sum_l w_l$ (the plain mean with equal shares) or the worst case (the
+maximum) over the loads, and the optional penalties $p_k$ are the largest Hertz pressure
+(MPa) and the loaded TE peak-to-peak along the line of action (mm) over the loads and
+samples, with weights $\mu_k$ in the objective's unit. `Objective.aggregated` gives any
+quantity's aggregate from one `Evaluation`, so one compiled program serves them all.
 
 For each design and error sample the unloaded TCA runs once (it does not depend on the
 load); the LTCA and the first-contact search run per load (`vmap` over the loads), exactly
@@ -28,6 +34,8 @@ batching saves; on an accelerator set a larger `batch_size`.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -41,14 +49,29 @@ from ..geometry.errors import MeshErrors
 from ..geometry.modification import FlankModification
 from .. import pipeline
 from ..impact import ImpactRegime
+from ..runtime.resources import check_memory
 from ..scene import Scene, check_one_zone
 from .space import modification_from_design
 
-#: The objective's quantities $q$: name -> (unit, what it is, its value from the impact's
-#: force (N) and normal velocity (mm/s)). A new quantity is an entry here.
+class Quantity(NamedTuple):
+    """A quantity the objective can aggregate: its unit, what it is, its sense (1:
+    minimised, -1: maximised, the objective holding its negative) and its value per load
+    and sample from an `Evaluation`."""
+
+    unit: str
+    what: str
+    sense: float
+    of: Callable[[Evaluation], Array]
+
+
+#: The objective's quantities $q$ by name. A new quantity is an entry here.
 QUANTITIES = {
-    "force": ("N", "peak impact force F_s", lambda force, velocity: force),
-    "velocity": ("mm/s", "normal impact velocity |v_n|", lambda force, velocity: jnp.abs(velocity)),
+    "force": Quantity("N", "peak impact force F_s", 1.0, lambda e: e.force),
+    "velocity": Quantity("mm/s", "normal impact velocity |v_n|", 1.0, lambda e: jnp.abs(e.velocity)),
+    "lte": Quantity("µm", "loaded TE peak-to-peak along the line of action", 1.0, lambda e: 1e3 * e.lte_peak_to_peak),
+    "pressure": Quantity("MPa", "largest Hertz pressure of the cycle", 1.0, lambda e: e.pressure),
+    "stiffness": Quantity("N/(mm·µm)", "cycle mean of the tangent mesh stiffness per face width (maximised)", -1.0,
+                          lambda e: e.stiffness),
 }
 AGGREGATES = ("mean", "max")
 
@@ -77,12 +100,13 @@ class Evaluation(eqx.Module):
 
     Attributes:
         objective: $J(y)$ ($+\\infty$ when a stage failed).
-        quantity: $q$ per load and sample (N or mm/s).
+        quantity: the objective's $q$ per load and sample (its `Quantity.unit`).
         force: impact force $F_s$ (N).
         velocity: normal impact velocity $v_n$ (mm/s).
         edge: the first contact is a tip edge (`ImpactRegime.edge`).
         pressure: largest Hertz pressure of the cycle (MPa).
         lte_peak_to_peak: loaded TE peak-to-peak along the line of action (mm).
+        stiffness: cycle mean of the tangent mesh stiffness per face width (N/(mm·µm)).
         failed: number of (load, sample) entries whose LTCA or impact stage failed.
     """
 
@@ -93,6 +117,7 @@ class Evaluation(eqx.Module):
     edge: Array
     pressure: Float[Array, "load sample"]
     lte_peak_to_peak: Float[Array, "load sample"]
+    stiffness: Float[Array, "load sample"]
     failed: Array
 
 
@@ -105,12 +130,13 @@ class Objective(eqx.Module):
 
     Attributes:
         scene: the template scene (its modification is replaced by the design, its torque
-            by each load, its errors by each sample).
+            and speed by each load's, its errors by each sample).
         torques: the loads $T_l$ (N·mm), shape (L,).
-        weights: $w_l$, shape (L,), summing to 1.
+        speeds: the pinion speed $\\omega_l$ at each load (rad/s), shape (L,).
+        weights: $w_l$ (time shares), shape (L,), summing to 1.
         errors: the error samples $e_s$ as a batched `MeshErrors` (leading axis S).
-        quantity: "force" ($F_s$, N) or "velocity" ($|v_n|$, mm/s) (static).
-        aggregate: "mean" or "max" over the loads (static).
+        quantity: a name of `QUANTITIES` (static).
+        aggregate: "mean" (time-weighted) or "max" (worst case) over the loads (static).
         pressure_penalty, lte_penalty: optional `Penalty` on the largest Hertz pressure
             (MPa) and the loaded TE peak-to-peak (mm).
         batch_size: designs evaluated together inside `batch` (static; see the module).
@@ -118,6 +144,7 @@ class Objective(eqx.Module):
 
     scene: Scene
     torques: Float[Array, " load"]
+    speeds: Float[Array, " load"]
     weights: Float[Array, " load"]
     errors: MeshErrors
     quantity: str = eqx.field(static=True)
@@ -133,6 +160,8 @@ class Objective(eqx.Module):
         *,
         torques: ArrayLike | None = None,
         torques_Nm: ArrayLike | None = None,
+        speeds: ArrayLike | None = None,
+        speeds_rpm: ArrayLike | None = None,
         weights: ArrayLike | None = None,
         quantity: str = "force",
         aggregate: str = "mean",
@@ -149,9 +178,14 @@ class Objective(eqx.Module):
                 zero amounts), its design the initial one.
             torques / torques_Nm: the load spectrum in N·mm or N·m (give at most one; default
                 the scene's own torque): a non-empty list of finite torques > 0.
-            weights: one weight >= 0 per load, with a positive sum (default equal).
-            quantity: "force" or "velocity".
-            aggregate: "mean" (weighted) or "max" over the loads.
+            speeds / speeds_rpm: the pinion speed at each load in rad/s or rpm (give at most
+                one; default the scene's own speed at every load): one finite speed >= 0
+                per load, or one for all.
+            weights: time shares, one weight >= 0 per load, with a positive sum (default
+                equal).
+            quantity: a name of `QUANTITIES` ("force", "velocity", "lte", "pressure",
+                "stiffness").
+            aggregate: "mean" (time-weighted) or "max" (worst case) over the loads.
             errors: error samples as a `MeshErrors` with a leading sample axis (see
                 `sample_errors`), or None for the scene's own errors (one sample).
             pressure_penalty, lte_penalty: optional penalties.
@@ -168,29 +202,9 @@ class Objective(eqx.Module):
         check_choice("quantity (objective)", quantity, tuple(QUANTITIES))
         check_choice("aggregate", aggregate, AGGREGATES)
         check_int("batch_size", batch_size, 1)
-        if torques is not None and torques_Nm is not None:
-            raise ValueError("give the loads once: torques (N·mm) or torques_Nm (N·m)")
-        if torques is None and torques_Nm is None:
-            torques, name, unit, factor = [float(scene.operating.torque)], "torques", "N·mm", 1.0
-        elif torques is not None:
-            name, unit, factor = "torques", "N·mm", 1.0
-        else:
-            torques, name, unit, factor = torques_Nm, "torques_Nm", "N·m", 1000.0
-        values = np.asarray(torques, dtype=float)
-        if values.ndim != 1 or values.size == 0:
-            raise ValueError(f"{name} must be a non-empty list of pinion torques ({unit}); got {torques!r}")
-        check_range(name, values, 0.0, 1e12 / factor, low_inclusive=False, unit=unit)
-        values = values * factor
-        if weights is None:
-            w = np.full(values.size, 1.0 / values.size)
-        else:
-            w = np.asarray(weights, dtype=float)
-            if w.shape != values.shape:
-                raise ValueError(f"load weights must hold one weight per load ({values.size}); got {list(np.atleast_1d(w))}")
-            check_range("load weights", w, 0.0, None)
-            if not w.sum() > 0.0:
-                raise ValueError(f"load weights must sum to a positive number; got {list(w)}")
-            w = w / w.sum()
+        values = _loads(scene, torques, torques_Nm)
+        w = _weights(weights, values.size)
+        rates = _speeds(scene, speeds, speeds_rpm, values.size)
         if errors is None:
             base = scene.errors if scene.errors is not None else MeshErrors()
             errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], base)
@@ -198,22 +212,30 @@ class Objective(eqx.Module):
             raise ValueError("errors must be a MeshErrors with one leading sample axis (see sample_errors)")
         if scene.errors is None:  # the samples replace the errors: the scene needs the slot
             scene = dataclasses.replace(scene, errors=MeshErrors())
+        # every load and error sample of `batch_size` designs at once (`evaluate`, `batch`)
+        samples = int(jnp.shape(errors.misalignment)[0])
+        check_memory(scene, loads=values.size * samples, what="the objective", batch=batch_size)
         scene = pipeline.prepare(scene)
         dtype = jnp.float32 if scene.accuracy.dtype == "float32" else jnp.float64
         errors = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), errors)
-        return cls(scene, jnp.asarray(values, dtype), jnp.asarray(w, dtype), errors, quantity, aggregate,
-                   pressure_penalty, lte_penalty, batch_size)
+        return cls(scene=scene, torques=jnp.asarray(values, dtype), speeds=jnp.asarray(rates, dtype),
+                   weights=jnp.asarray(w, dtype), errors=errors, quantity=quantity, aggregate=aggregate,
+                   pressure_penalty=pressure_penalty, lte_penalty=lte_penalty, batch_size=batch_size)
 
     @property
     def samples(self) -> int:
         """Number of error samples $S$."""
         return int(jnp.shape(self.errors.misalignment)[0])
 
-    def scene_for(self, design: ArrayLike, torque: ArrayLike | None = None, errors: MeshErrors | None = None) -> Scene:
-        """The template scene with the design's modification (and a load and error sample)."""
+    def scene_for(self, design: ArrayLike, torque: ArrayLike | None = None, errors: MeshErrors | None = None,
+                  speed: ArrayLike | None = None) -> Scene:
+        """The template scene with the design's modification (and a load, speed and error
+        sample)."""
         scene = eqx.tree_at(lambda s: s.modification, self.scene, modification_from_design(design))
         if torque is not None:
             scene = eqx.tree_at(lambda s: s.operating.torque, scene, jnp.asarray(torque, self.torques.dtype))
+        if speed is not None:
+            scene = eqx.tree_at(lambda s: s.operating.speed, scene, jnp.asarray(speed, self.torques.dtype))
         if errors is not None:
             scene = eqx.tree_at(lambda s: s.errors, scene, errors)
         return scene
@@ -227,8 +249,7 @@ class Objective(eqx.Module):
             modified = pipeline.modification_checks(scene, pair)
             tca = pipeline.unloaded(scene, pair, modified)
 
-            def per_load(torque):
-                speed = scene.operating.speed
+            def per_load(torque, speed):
                 checks = modified + pipeline.operating_checks(torque, speed)
                 ltca = pipeline.loaded(scene, pair, tca, torque, checks)
                 impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
@@ -239,23 +260,35 @@ class Objective(eqx.Module):
                     impact.regime == ImpactRegime.edge,
                     jnp.max(ltca.pressure),
                     ltca.lte_peak_to_peak_line,
+                    ltca.mean_mesh_stiffness,
                     ok,
                 )
 
-            return jax.vmap(per_load)(self.torques)
+            return jax.vmap(per_load)(self.torques, self.speeds)
 
-        out = jax.vmap(per_sample, out_axes=1)(self.errors)
-        force, velocity, edge, pressure, lte, ok = out
-        quantity = QUANTITIES[self.quantity][2](force, velocity)
-        per_load = jnp.mean(quantity, axis=1)
-        value = jnp.sum(self.weights * per_load) if self.aggregate == "mean" else jnp.max(per_load)
+        force, velocity, edge, pressure, lte, stiffness, ok = jax.vmap(per_sample, out_axes=1)(self.errors)
+        zero = jnp.zeros((), force.dtype)
+        evaluation = Evaluation(zero, force, force, velocity, edge, pressure, lte, stiffness, jnp.sum(~ok))
+        quantity = QUANTITIES[self.quantity].of(evaluation)
+        return eqx.tree_at(lambda e: (e.objective, e.quantity), evaluation, (self.value(evaluation), quantity))
+
+    def aggregated(self, evaluation: Evaluation, quantity: str | None = None) -> Scalar:
+        """The aggregate over the loads (time-weighted mean or worst case, `aggregate`) of a
+        quantity's sample mean, signed by its sense (`Quantity.sense`): the objective's
+        own quantity by default, or any of `QUANTITIES` from the same evaluation."""
+        q = QUANTITIES[self.quantity if quantity is None else quantity]
+        per_load = q.sense * jnp.mean(q.of(evaluation), axis=-1)
+        return jnp.sum(self.weights * per_load, axis=-1) if self.aggregate == "mean" else jnp.max(per_load, axis=-1)
+
+    def value(self, evaluation: Evaluation) -> Scalar:
+        """$J$ from an evaluation's results: the aggregate of the objective's quantity plus the
+        penalties; $+\\infty$ where a stage failed."""
+        value = self.aggregated(evaluation)
         if self.pressure_penalty is not None:
-            value = value + self.pressure_penalty(jnp.max(pressure))
+            value = value + self.pressure_penalty(jnp.max(evaluation.pressure, axis=(-2, -1)))
         if self.lte_penalty is not None:
-            value = value + self.lte_penalty(jnp.max(lte))
-        failed = jnp.sum(~ok)
-        value = jnp.where(failed == 0, value, jnp.inf)
-        return Evaluation(value, quantity, force, velocity, edge, pressure, lte, failed)
+            value = value + self.lte_penalty(jnp.max(evaluation.lte_peak_to_peak, axis=(-2, -1)))
+        return jnp.where(evaluation.failed == 0, value, jnp.inf)
 
     def __call__(self, design: ArrayLike) -> Scalar:
         """$J(y)$ for one design (mm, shape (6,))."""
@@ -265,6 +298,53 @@ class Objective(eqx.Module):
         """`evaluate` for designs of shape (P, 6), in one program (leading axis P)."""
         designs = jnp.asarray(designs, self.torques.dtype)
         return jax.lax.map(self.evaluate, designs, batch_size=self.batch_size)
+
+
+def _loads(scene: Scene, torques, torques_Nm) -> np.ndarray:
+    """The load spectrum (N·mm) from `torques` (N·mm) or `torques_Nm`, default the scene's."""
+    if torques is not None and torques_Nm is not None:
+        raise ValueError("give the loads once: torques (N·mm) or torques_Nm (N·m)")
+    if torques is None and torques_Nm is None:
+        torques, name, unit, factor = [float(scene.operating.torque)], "torques", "N·mm", 1.0
+    elif torques is not None:
+        name, unit, factor = "torques", "N·mm", 1.0
+    else:
+        torques, name, unit, factor = torques_Nm, "torques_Nm", "N·m", 1000.0
+    values = np.asarray(torques, dtype=float)
+    if values.ndim != 1 or values.size == 0:
+        raise ValueError(f"{name} must be a non-empty list of pinion torques ({unit}); got {torques!r}")
+    check_range(name, values, 0.0, 1e12 / factor, low_inclusive=False, unit=unit)
+    return values * factor
+
+
+def _weights(weights, count: int) -> np.ndarray:
+    """The loads' time shares, normalised to sum 1 (default equal)."""
+    if weights is None:
+        return np.full(count, 1.0 / count)
+    w = np.asarray(weights, dtype=float)
+    if w.shape != (count,):
+        raise ValueError(f"load weights must hold one weight per load ({count}); got {list(np.atleast_1d(w))}")
+    check_range("load weights", w, 0.0, None)
+    if not w.sum() > 0.0:
+        raise ValueError(f"load weights must sum to a positive number; got {list(w)}")
+    return w / w.sum()
+
+
+def _speeds(scene: Scene, speeds, speeds_rpm, count: int) -> np.ndarray:
+    """The pinion speed at each load (rad/s) from `speeds` (rad/s) or `speeds_rpm`, one per
+    load or one for all; default the scene's."""
+    if speeds is not None and speeds_rpm is not None:
+        raise ValueError("give the speeds once: speeds (rad/s) or speeds_rpm (rpm)")
+    if speeds is None and speeds_rpm is None:
+        return np.full(count, float(scene.operating.speed))
+    name, unit, value = ("speeds", "rad/s", speeds) if speeds is not None else ("speeds_rpm", "rpm", speeds_rpm)
+    values = np.atleast_1d(np.asarray(value, dtype=float))
+    if values.ndim != 1 or values.size not in (1, count):
+        raise ValueError(f"{name} must hold one pinion speed ({unit}) per load ({count}) or one for all; got {value!r}")
+    factor = 1.0 if speeds is not None else 2.0 * np.pi / 60.0  # rad/s per given unit
+    check_range(name, values, 0.0, 1e6 / factor, unit=unit)
+    values = values * factor
+    return np.broadcast_to(values, (count,)).copy()
 
 
 def sample_errors(

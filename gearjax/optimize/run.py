@@ -27,7 +27,6 @@ import json
 import os
 import time
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -38,21 +37,19 @@ from ..accuracy import Accuracy
 from ..io.progress import Progress, compiling
 from ..io.rundir import RunDirectory, atomic_write
 from .certification import CERTIFY_TOP, Certification, accuracy_name, candidates, certification_accuracy, certify
-from .ga import GAConfig, GAState, ga_ask, ga_init, ga_tell
-from .gradient import GradientConfig, GradientState, gradient_init, gradient_step, sample_positions, smoothed
-from .batch import batch_objective, batch_value_and_grad
+from .ga import GAConfig
+from .gradient import GradientConfig
+from .methods import GeneticSearch, GradientSearch, SearchMethod
 from .objective import Objective
 from .space import DesignSpace
-
-METHODS = ("ga", "gradient")
 
 
 @dataclasses.dataclass(frozen=True)
 class OptimizationResult:
-    """Outcome of `genetic` or `gradient_descent` (host values, engine units).
+    """Outcome of `minimize` (`genetic`, `gradient_descent`; host values, engine units).
 
     Attributes:
-        method: "ga" or "gradient".
+        method: the method's registered name (`gearjax.optimize.methods`).
         best_design: $(y_1, \\dots, y_6)$ (mm) of the best design: the lowest certified
             value among the certified candidates, or the search's best without certification.
         best_objective: its objective value at the search's accuracy (N or mm/s).
@@ -94,43 +91,21 @@ class OptimizationResult:
     best_source: str = "search"
 
 
-# ---------------------------------------------------------------------------- compiled steps
-# The optimisers' own steps are small programs of their own (`batch` holds the objective's).
-_ga_ask = eqx.filter_jit(ga_ask)
-_ga_tell = eqx.filter_jit(ga_tell)
-_gradient_step = eqx.filter_jit(lambda state, values, grads, config: gradient_step(state, *smoothed(values, grads), config))
-_sample_positions = eqx.filter_jit(sample_positions)
-
-
-def _ga_generation(objective: Objective, space: DesignSpace, config: GAConfig, state: GAState):
-    unit, state = _ga_ask(state, config)
-    designs = space.to_design(unit)
-    values = batch_objective(objective, designs)
-    return _ga_tell(state, unit, values, config), designs, values
-
-
-def _gradient_iteration(objective: Objective, space: DesignSpace, config: GradientConfig, state: GradientState):
-    points = _sample_positions(state, config)  # (starts, samples, 6)
-    unit = points.reshape(-1, points.shape[-1])
-    values, grads = batch_value_and_grad(objective, space, unit)
-    state = _gradient_step(state, values.reshape(points.shape[:2]), grads.reshape(points.shape), config)
-    return state, space.to_design(unit), values
-
-
 # ---------------------------------------------------------------------------- drivers
-def _description(method, objective: Objective, space: DesignSpace, config, seed, steps) -> dict:
+def _description(method: SearchMethod, objective: Objective, space: DesignSpace, seed) -> dict:
     o = objective
     return {
-        "method": method,
+        "method": method.name,
         "seed": int(seed),
-        "steps": int(steps),
-        "config": {f.name: getattr(config, f.name) for f in dataclasses.fields(config)},
+        "steps": int(method.steps),
+        "config": {f.name: getattr(method.config, f.name) for f in dataclasses.fields(method.config)},
         "lower_mm": np.asarray(space.lower).tolist(),
         "upper_mm": np.asarray(space.upper).tolist(),
         "objective": {
             "quantity": o.quantity,
             "aggregate": o.aggregate,
             "torques_Nmm": np.asarray(o.torques).tolist(),
+            "speeds_rad_s": np.asarray(o.speeds).tolist(),
             "weights": np.asarray(o.weights).tolist(),
             "error_samples": o.samples,
             "errors_mm": {k: np.asarray(getattr(o.errors, k)).tolist() for k in ("base_pitch_deviation", "pitch_deviation", "misalignment")},
@@ -140,48 +115,64 @@ def _description(method, objective: Objective, space: DesignSpace, config, seed,
     }
 
 
-def _initial_objective(method: str, objective: Objective, space: DesignSpace, design, batch: int) -> float:
-    """J of the scene's own design, through the batch program the run compiles anyway
-    (the batch holds copies of the design: a few evaluations instead of a compilation)."""
-    tiled = jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype), (batch, 6))
-    if method == "ga":
-        return float(batch_objective(objective, tiled)[0])
-    return float(batch_value_and_grad(objective, space, space.to_unit(tiled))[0][0])
+def minimize(
+    objective: Objective,
+    space: DesignSpace,
+    method: SearchMethod,
+    *,
+    seed: int = 0,
+    run_dir: str | os.PathLike | None = None,
+    resume: bool = False,
+    progress: str | None = None,
+    initial: ArrayLike | None = None,
+    certify: str | Accuracy | None = "reference",
+    certify_top: int = CERTIFY_TOP,
+) -> OptimizationResult:
+    """Minimise the objective with a search method (`gearjax.optimize.methods`: a
+    registered `SearchMethod` with its settings), one compiled call of the objective's
+    batch program per step, every step written to `run_dir`; then certify.
 
+    Args:
+        objective: the `Objective`.
+        space: the `DesignSpace` (bounds in mm).
+        method: the method, e.g. `GeneticSearch(GAConfig(), generations=30)` or
+            `GradientSearch(GradientConfig())`.
+        seed: random seed; the same seed gives the same run bit for bit.
+        run_dir: directory for the run's files (see the module docstring), or None.
+        resume: continue the run in `run_dir`.
+        progress: "auto" (a tqdm bar on a terminal, else plain lines), "bar", "lines" or
+            None (quiet).
+        initial: designs (mm, shape (m, 6)) that start the search (first members of the
+            GA's population, first starts), clipped to the bounds; by default the scene's
+            own design where it lies within the bounds, the rest random.
+        certify: accuracy at which the best candidates are evaluated again once the search
+            is done (a preset name or an `Accuracy`; `gearjax.optimize.certification`), or None.
+        certify_top: candidates certified besides the best design found (the method's
+            `candidates`) and the initial design.
 
-def _run(method, objective, space, config, steps, seed, run_dir, resume, progress, init_state, step_fn, batch,
-         certify_accuracy, certify_top):
-    certify_accuracy = _checked(objective, steps, certify_top, certify_accuracy)
+    The result is the best of the certified candidates and the scene's own design: never
+    worse than the start (`OptimizationResult.best_source` says which).
+    """
+    if not isinstance(method, SearchMethod):
+        raise ValueError(f"method must be a SearchMethod (gearjax.optimize.methods); got {type(method).__name__}")
+    certify_accuracy = _checked(objective, method.steps, certify_top, certify)
+    space.check_fits(objective.scene)
+    init_state = method.init(jax.random.PRNGKey(seed), _unit(space, _starts(objective, space, initial)),
+                             objective.torques.dtype)
     start = time.perf_counter()
-    directory, state, records = _resume(run_dir, resume, init_state,
-                                        _description(method, objective, space, config, seed, steps))
+    directory, state, records = _resume(run_dir, resume, init_state, _description(method, objective, space, seed))
     previous_time = records[-1]["elapsed_s"] if records else 0.0
     initial_design = np.asarray(objective.scene.modification.as_vector())
-    program = "the GA's batch program" if method == "ga" else "the value-and-gradient program"
-    with compiling(f"{program} for this objective", mode=progress):  # the run's one big compilation
+    with compiling(f"{method.program} for this objective", mode=progress):  # the run's one big compilation
         initial = (records[0]["initial_objective"] if records
-                   else _initial_objective(method, objective, space, initial_design, batch))
-    samples = int(objective.torques.shape[0]) * objective.samples
-    bar = Progress(progress, steps, len(records), "generation" if method == "ga" else "iteration")
-    try:
-        for step in range(len(records) + 1, steps + 1):
-            state, designs, values = step_fn(state)
-            best, best_design = _best(method, state, space)
-            elapsed = previous_time + time.perf_counter() - start
-            record = _record(step, state, designs, values, best, best_design, step * batch * samples, elapsed,
-                             initial)
-            records.append(record)
-            if directory is not None:
-                directory.save(state, record)
-            bar.update(step, elapsed, best=f"{best:.6g}")
-            if method == "gradient" and not bool(np.any(np.asarray(state.active))):
-                break
-    finally:
-        bar.close()
+                   else method.initial_objective(objective, space, initial_design))
+    state = _steps(method, objective, space, state, records, directory, progress, initial,
+                   lambda: previous_time + time.perf_counter() - start)
     best, best_design = _best(method, state, space)
     certification = None
     if certify_accuracy is not None:
-        designs, values = _with_initial(*candidates(method, state, space, certify_top), initial_design, initial)
+        designs, values = _with_initial(*candidates(*method.candidates(state), space, certify_top), initial_design,
+                                        initial)
         # one batch shape for every run: the search's candidates and the initial design
         certification = _certification(directory, objective, designs, values, certify_accuracy, certify_top + 1,
                                        progress)
@@ -191,24 +182,46 @@ def _run(method, objective, space, config, steps, seed, run_dir, resume, progres
         best_design, best = initial_design, float(initial)
     source = "initial" if _same_design(best_design, initial_design) else "search"
     history = [r["best_objective"] for r in records]
-    evaluations = len(records) * batch * samples
+    evaluations = len(records) * method.batch * int(objective.torques.shape[0]) * objective.samples
     return OptimizationResult(
-        method=method,
+        method=method.name,
         best_design=best_design,
         best_objective=best,
         initial_objective=float(initial),
         initial_design=initial_design,
         history=history,
         evaluations=evaluations,
-        gradient_evaluations=evaluations if method == "gradient" else 0,
+        gradient_evaluations=evaluations if method.uses_gradients else 0,
         steps=len(records),
         wall_time_s=previous_time + time.perf_counter() - start,
-        converged=_converged(method, state, history),
+        converged=method.converged(state, history),
         run_dir=None if directory is None else str(directory.path),
         certified_objective=None if certification is None else float(certification.certified[certification.best]),
         certification=certification,
         best_source=source,
     )
+
+
+def _steps(method: SearchMethod, objective, space, state, records: list, directory, progress, initial, elapsed):
+    """Run the method's steps after those in `records` (appended to it and saved to the
+    run directory one by one) until its cap or until it has finished; the last state."""
+    samples = int(objective.torques.shape[0]) * objective.samples
+    bar = Progress(progress, method.steps, len(records), method.step_name)
+    try:
+        for step in range(len(records) + 1, method.steps + 1):
+            state, designs, values = method.step(objective, space, state)
+            best, best_design = _best(method, state, space)
+            record = _record(step, state, designs, values, best, best_design, step * method.batch * samples,
+                             elapsed(), initial)
+            records.append(record)
+            if directory is not None:
+                directory.save(state, record)
+            bar.update(step, record["elapsed_s"], best=f"{best:.6g}")
+            if method.finished(state):
+                break
+    finally:
+        bar.close()
+    return state
 
 
 def _checked(objective, steps, certify_top, certify_accuracy):
@@ -246,15 +259,6 @@ def _record(step, state, designs, values, best, best_design, evaluations, elapse
     }
 
 
-def _converged(method, state, history) -> bool:
-    """Gradient descent: every start stopped. GA: the best value unchanged over the last
-    quarter of at least four generations."""
-    if method == "gradient":
-        return not bool(np.any(np.asarray(state.active)))
-    tail = history[-max(2, len(history) // 4):]
-    return len(history) >= 4 and tail[0] == tail[-1]
-
-
 #: designs closer than this in every parameter (mm) are the same design (a design passed
 #: through the unit cube and back differs from itself by rounding)
 SAME_DESIGN_MM = 1e-12
@@ -289,12 +293,10 @@ def _certification(directory, objective, designs, values, accuracy, top, progres
     return result
 
 
-def _best(method, state, space: DesignSpace) -> tuple[float, np.ndarray]:
+def _best(method: SearchMethod, state, space: DesignSpace) -> tuple[float, np.ndarray]:
     """Best value and design (mm) so far."""
-    if method == "ga":
-        return float(state.best_fitness), np.asarray(space.to_design(state.best))
-    i = int(np.argmin(np.asarray(state.best_value)))
-    return float(state.best_value[i]), np.asarray(space.to_design(state.best[i]))
+    value, unit = method.best(state)
+    return float(value), np.asarray(space.to_design(unit))
 
 
 def _starts(objective: Objective, space: DesignSpace, initial):
@@ -322,47 +324,14 @@ def genetic(
     *,
     config: GAConfig | None = None,
     generations: int = 30,
-    seed: int = 0,
-    run_dir: str | os.PathLike | None = None,
-    resume: bool = False,
-    progress: str | None = None,
-    initial: ArrayLike | None = None,
-    certify: str | Accuracy | None = "reference",
-    certify_top: int = CERTIFY_TOP,
+    **options,
 ) -> OptimizationResult:
-    """Minimise the objective with the genetic algorithm (`gearjax.optimize.ga`).
-
-    One compiled call per generation evaluates the whole population (`Objective.batch`).
-
-    Args:
-        objective: the `Objective`.
-        space: the `DesignSpace` (bounds in mm).
-        config: `GAConfig` (default seed 001's population 40).
-        generations: generations to run (seed 001: 30).
-        seed: random seed; the same seed gives the same run bit for bit.
-        run_dir: directory for the run's files (see the module docstring), or None.
-        resume: continue the run in `run_dir`.
-        progress: "auto" (a tqdm bar on a terminal, else plain lines), "bar", "lines" or
-            None (quiet).
-        initial: designs (mm, shape (m, 6)) placed in the first population (or used as the
-            first starts), clipped to the bounds; by default the scene's own design where it
-            lies within the bounds, the rest random.
-        certify: accuracy at which the best candidates are evaluated again once the search
-            is done (a preset name or an `Accuracy`; `gearjax.optimize.certification`), or None.
-        certify_top: candidates certified besides the best design found (the best distinct
-            members of the final population, or the starts' best points) and the initial
-            design.
-
-    The result is the best of the certified candidates and the scene's own design: never
-    worse than the start (`OptimizationResult.best_source` says which).
-    """
-    config = GAConfig() if config is None else config
-    space.check_fits(objective.scene)
-    state = ga_init(jax.random.PRNGKey(seed), config, 6, _unit(space, _starts(objective, space, initial)))
-    state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
-    step = lambda s: _ga_generation(objective, space, config, s)  # noqa: E731
-    return _run("ga", objective, space, config, generations, seed, run_dir, resume, progress, state, step,
-                config.population, certify, certify_top)
+    """Minimise the objective with the genetic algorithm (`gearjax.optimize.ga`): `minimize`
+    with `GeneticSearch(config, generations)` (default seed 001's population 40 over 30
+    generations); one compiled call per generation evaluates the whole population. The
+    other arguments (`seed`, `run_dir`, `resume`, `progress`, `initial`, `certify`,
+    `certify_top`) are `minimize`'s."""
+    return minimize(objective, space, GeneticSearch(GAConfig() if config is None else config, generations), **options)
 
 
 def gradient_descent(
@@ -370,24 +339,11 @@ def gradient_descent(
     space: DesignSpace,
     *,
     config: GradientConfig | None = None,
-    seed: int = 0,
-    run_dir: str | os.PathLike | None = None,
-    resume: bool = False,
-    progress: str | None = None,
-    initial: ArrayLike | None = None,
-    certify: str | Accuracy | None = "reference",
-    certify_top: int = CERTIFY_TOP,
+    **options,
 ) -> OptimizationResult:
     """Minimise the objective by projected Adam from `config.starts` Latin-hypercube starts
     (`gearjax.optimize.gradient`; with `config.smoothing`, on the Gaussian-smoothed
-    objective), all starts and their samples in one compiled call per iteration.
-
-    Arguments as for `genetic`; `config.iterations` caps the iterations.
-    """
-    config = GradientConfig() if config is None else config
-    space.check_fits(objective.scene)
-    state = gradient_init(jax.random.PRNGKey(seed), config, 6, _unit(space, _starts(objective, space, initial)))
-    state = jax.tree_util.tree_map(lambda x: x.astype(objective.torques.dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, state)
-    step = lambda s: _gradient_iteration(objective, space, config, s)  # noqa: E731
-    return _run("gradient", objective, space, config, config.iterations, seed, run_dir, resume, progress, state, step,
-                config.starts * config.samples, certify, certify_top)
+    objective), all starts and their samples in one compiled call per iteration:
+    `minimize` with `GradientSearch(config)`; `config.iterations` caps the iterations. The
+    other arguments are `minimize`'s."""
+    return minimize(objective, space, GradientSearch(GradientConfig() if config is None else config), **options)

@@ -42,9 +42,11 @@ def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | 
         `parameters`: for each modification parameter its value and
         $\\partial J/\\partial y$ in the scene file's units (per µm of an amount, per mm of a
         length) and, with a space, `per_bound_width` ($w\\,\\partial J/\\partial y$);
-        `loads`: $\\partial J/\\partial T$ per N·m for each load; `speed`:
-        $\\partial J/\\partial n$ per rpm and the log-derivative
-        $(\\omega/J)\\,\\partial J/\\partial\\omega$; `errors`: $\\partial J/\\partial f$ per µm
+        `loads`: for each load $\\partial J/\\partial T$ per N·m and its speed with
+        $\\partial J/\\partial n$ per rpm; `speed`: the time-weighted mean speed, and for every
+        load's speed moved together $\\partial J/\\partial n$ per rpm and the log-derivative
+        $\\sum_l(\\omega_l/J)\\,\\partial J/\\partial\\omega_l$ (with one speed for all loads,
+        $(\\omega/J)\\,\\partial J/\\partial\\omega$); `errors`: $\\partial J/\\partial f$ per µm
         for a common shift of each error over all samples.
     """
     designs = np.asarray(design, dtype=float)
@@ -53,7 +55,7 @@ def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | 
     if not np.all(np.isfinite(designs)):
         raise ValueError("design must be finite (y1..y6, mm)")
     values, (g_design, g_torque, g_speed, g_errors) = batch_gradients(objective, designs.reshape(-1, 6))
-    speed = float(objective.scene.operating.speed)
+    speeds, weights = np.asarray(objective.speeds), np.asarray(objective.weights)
     rpm = 2.0 * np.pi / 60.0  # rad/s per rpm
     results = []
     for k, y in enumerate(designs.reshape(-1, 6)):
@@ -68,13 +70,15 @@ def sensitivities(objective: Objective, design: ArrayLike, space: DesignSpace | 
             "objective": value,
             "parameters": parameters,
             "loads": [
-                {"torque_Nm": float(t) / 1000.0, "gradient_per_Nm": float(g) * 1000.0}
-                for t, g in zip(np.asarray(objective.torques), np.asarray(g_torque[k]), strict=True)
+                {"torque_Nm": float(t) / 1000.0, "gradient_per_Nm": float(g) * 1000.0, "speed_rpm": float(n) / rpm,
+                 "speed_gradient_per_rpm": float(gn) * rpm}
+                for t, g, n, gn in zip(np.asarray(objective.torques), np.asarray(g_torque[k]), speeds,
+                                       np.asarray(g_speed[k]), strict=True)
             ],
             "speed": {
-                "speed_rpm": speed / rpm,
-                "gradient_per_rpm": float(g_speed[k]) * rpm,
-                "log_derivative": float(g_speed[k]) * speed / value,
+                "speed_rpm": float(np.sum(weights * speeds)) / rpm,
+                "gradient_per_rpm": float(np.sum(g_speed[k])) * rpm,
+                "log_derivative": float(np.sum(np.asarray(g_speed[k]) * speeds)) / value,
             },
             "errors": {key: float(jnp.sum(getattr(g_errors, name)[k])) * 1e-3 for name, key in _ERRORS},
         })
@@ -91,7 +95,13 @@ def sensitivity_table(result: dict) -> str:
     for load in result["loads"]:
         lines.append(f"torque {load['torque_Nm']:g} N·m        dJ/dT = {load['gradient_per_Nm']:.4g} per N·m")
     s = result["speed"]
-    lines.append(f"speed {s['speed_rpm']:g} rpm         dJ/dn = {s['gradient_per_rpm']:.4g} per rpm (log-derivative {s['log_derivative']:.4f})")
+    speeds = {load["speed_rpm"] for load in result["loads"]}
+    if len(speeds) > 1:
+        for load in result["loads"]:
+            lines.append(f"speed at {load['torque_Nm']:g} N·m {load['speed_rpm']:g} rpm  "
+                         f"dJ/dn = {load['speed_gradient_per_rpm']:.4g} per rpm")
+    what = f"speed {s['speed_rpm']:g} rpm" if len(speeds) == 1 else "all speeds together"
+    lines.append(f"{what:24s} dJ/dn = {s['gradient_per_rpm']:.4g} per rpm (log-derivative {s['log_derivative']:.4f})")
     for key, g in result["errors"].items():
         lines.append(f"{key:24s} dJ/df = {g:.4g} per um")
     return "\n".join(lines)

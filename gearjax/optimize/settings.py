@@ -3,11 +3,14 @@
 Every key is optional (defaults in brackets); units are those of the scene file:
 
     [optimize]
-    method = "gradient"           # "gradient" | "ga" ["gradient"]
-    objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) ["force"]
-    loads_Nm = [400, 1000, 1600]  # load spectrum [the scene's torque]
-    load_weights = [1, 2, 1]      # one per load, sum > 0 [equal]
-    aggregate = "mean"            # "mean" (weighted) | "max" over the loads ["mean"]
+    method = "gradient"           # a registered method: "gradient" | "ga" ["gradient"]
+    objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) | "lte" (loaded
+                                  #   TE peak-to-peak, um) | "pressure" (MPa) | "stiffness"
+                                  #   (mean mesh stiffness, N/(mm um), maximised) ["force"]
+    loads_Nm = [400, 1000, 1600]  # duty cycle: loads [the scene's torque]
+    speeds_rpm = [3000, 5000, 5000] #   the pinion speed at each, or one for all [the scene's]
+    load_weights = [1, 2, 1]      #   time shares, one per load, sum > 0 [equal]
+    aggregate = "mean"            # "mean" (time-weighted) | "max" (worst case) over the loads ["mean"]
     error_samples = 8             # sampled mesh errors, 0 = the scene's own errors [0]
     misalignment_um = 10.0        # tolerance: f_ma ~ U(-t, t) [0]
     base_pitch_deviation_um = 5.0 # tolerance: f_pb ~ U(-t, t) [0]
@@ -47,11 +50,11 @@ from .certification import scene_with_accuracy
 from .ga import GAConfig
 from .gradient import GradientConfig
 from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
-from .run import METHODS
+from .methods import METHODS
 from .space import _MODULE_BOUNDS, PARAMETERS, SCENE_KEYS, DesignSpace
 
 _KEYS = {
-    "method", "objective", "loads_Nm", "load_weights", "aggregate", "error_samples", "misalignment_um",
+    "method", "objective", "loads_Nm", "speeds_rpm", "load_weights", "aggregate", "error_samples", "misalignment_um",
     "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
     "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "smoothing",
     "smoothing_pairs", "seed", "certify", "certify_top",
@@ -89,6 +92,7 @@ class OptimizeSettings:
     method: str = "gradient"
     objective: str = "force"
     loads_Nm: tuple[float, ...] | None = None
+    speeds_rpm: tuple[float, ...] | None = None
     load_weights: tuple[float, ...] | None = None
     aggregate: str = "mean"
     error_samples: int = 0
@@ -124,14 +128,14 @@ class OptimizeSettings:
             raise SettingsError(str(err)) from None
         out: dict[str, Any] = {}
         if "method" in table:
-            out["method"] = _choice("method", table["method"], METHODS)
+            out["method"] = _choice("method", table["method"], tuple(sorted(METHODS)))
         if "objective" in table:
             out["objective"] = _choice("objective", table["objective"], tuple(QUANTITIES))
         if "aggregate" in table:
             out["aggregate"] = _choice("aggregate", table["aggregate"], AGGREGATES)
         if "accuracy" in table:
             out["accuracy"] = _choice("accuracy", table["accuracy"], ("fast", "default", "reference"))
-        for key in ("loads_Nm", "load_weights"):
+        for key in ("loads_Nm", "speeds_rpm", "load_weights"):
             if key in table:
                 value = table[key]
                 if not isinstance(value, list) or not value:
@@ -187,6 +191,7 @@ class OptimizeSettings:
             objective = Objective.create(
                 scene,
                 torques_Nm=self.loads_Nm,
+                speeds_rpm=self.speeds_rpm,
                 weights=self.load_weights,
                 quantity=self.objective,
                 aggregate=self.aggregate,
@@ -197,6 +202,10 @@ class OptimizeSettings:
         except ValueError as err:
             raise SettingsError(f"[optimize] {err}") from None
         return objective, space
+
+    def search_method(self):
+        """The `SearchMethod` this section names, set up from its keys."""
+        return METHODS[self.method].from_settings(self)
 
     def ga_config(self) -> GAConfig:
         return GAConfig(population=self.population, elite=max(1, min(2, self.population - 1)))
@@ -213,14 +222,17 @@ def scene_keys() -> tuple[SceneKey, ...]:
     count = lambda key, low, meaning: SceneKey(key, "", d[key], meaning, (low, INF, True, True), integer=True)  # noqa: E731
     weight = lambda key, unit, meaning: SceneKey(key, unit, d[key], meaning, (0.0, INF, True, True))  # noqa: E731
     keys = [
-        SceneKey("method", "", d["method"], "search method", choices=METHODS),
+        SceneKey("method", "", d["method"], "search method (`gearjax.optimize.methods`)", choices=tuple(sorted(METHODS))),
         SceneKey("objective", "", d["objective"], "quantity minimised: " + "; ".join(
-            f"`{name}`, {what} ({unit})" for name, (unit, what, _) in QUANTITIES.items()), choices=tuple(QUANTITIES)),
+            f"`{name}`, {q.what} ({q.unit})" for name, q in QUANTITIES.items()), choices=tuple(QUANTITIES)),
         SceneKey("loads_Nm", "N·m", None, "pinion torques of the load spectrum", (0.0, INF, False, True),
                  absent="the scene's torque", allowed="a non-empty list"),
-        SceneKey("load_weights", "", None, "weights of the loads", (0.0, INF, True, True), absent="equal",
+        SceneKey("speeds_rpm", "rpm", None, "pinion speed at each load of the spectrum", (0.0, INF, True, True),
+                 absent="the scene's speed", allowed="one per load, or one for all"),
+        SceneKey("load_weights", "", None, "time shares (weights) of the loads", (0.0, INF, True, True), absent="equal",
                  allowed="one per load, with a positive sum"),
-        SceneKey("aggregate", "", d["aggregate"], "over the loads: weighted mean or maximum", choices=AGGREGATES),
+        SceneKey("aggregate", "", d["aggregate"], "over the loads: time-weighted mean or worst case (maximum)",
+                 choices=AGGREGATES),
         count("error_samples", 0, "sampled mesh errors per design (0: the scene's own errors)"),
         weight("misalignment_um", "µm", "tolerance of f_ma: samples drawn from U(−t, t)"),
         weight("base_pitch_deviation_um", "µm", "tolerance of f_pb"),
