@@ -156,4 +156,6 @@ def _simulate_designs(scene: Scene, batch: dict, outputs, batch_size):
 
     if batch_size is None:
         return jax.vmap(one)(batch)
-    return jax.lax.map(one, batch, batch_size=batch_size)
+    # one design at a time is a plain scan: `batch_size=1` would `vmap` each design, making
+    # every solver's condition batched (both branches of each `cond`, selects in each loop)
+    return jax.lax.map(one, batch, batch_size=None if batch_size == 1 else batch_size)

@@ -81,4 +81,4 @@ def _gradients_jit(objective, designs, torques, speeds, errors):
     def one(design):
         return jax.value_and_grad(J, argnums=(0, 1, 2, 3))(design, torques, speeds, errors)
 
-    return jax.lax.map(one, designs, batch_size=objective.batch_size)
+    return jax.lax.map(one, designs, batch_size=objective.map_batch_size)

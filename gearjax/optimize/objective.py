@@ -264,9 +264,9 @@ class Objective(eqx.Module):
                     ok,
                 )
 
-            return jax.vmap(per_load)(self.torques, self.speeds)
+            return _mapped(per_load, self.torques, self.speeds)
 
-        force, velocity, edge, pressure, lte, stiffness, ok = jax.vmap(per_sample, out_axes=1)(self.errors)
+        force, velocity, edge, pressure, lte, stiffness, ok = _mapped(per_sample, self.errors, out_axis=1)
         zero = jnp.zeros((), force.dtype)
         evaluation = Evaluation(zero, force, force, velocity, edge, pressure, lte, stiffness, jnp.sum(~ok))
         quantity = QUANTITIES[self.quantity].of(evaluation)
@@ -297,7 +297,25 @@ class Objective(eqx.Module):
     def batch(self, designs: ArrayLike) -> Evaluation:
         """`evaluate` for designs of shape (P, 6), in one program (leading axis P)."""
         designs = jnp.asarray(designs, self.torques.dtype)
-        return jax.lax.map(self.evaluate, designs, batch_size=self.batch_size)
+        return jax.lax.map(self.evaluate, designs, batch_size=self.map_batch_size)
+
+    @property
+    def map_batch_size(self) -> int | None:
+        """`lax.map`'s `batch_size` for `batch_size` designs at once: None for one, a plain
+        `scan` (`batch_size=1` would `vmap` each design, with the costs `_mapped` avoids)."""
+        return None if self.batch_size == 1 else self.batch_size
+
+
+def _mapped(fn, *xs, out_axis: int = 0):
+    """`jax.vmap(fn, out_axes=out_axis)(*xs)`, or, where the mapped axis has one entry (one
+    load, one error sample), `fn` of that entry with the axis put back. A `vmap` makes every
+    solver's condition a batched one, even over one entry: each `cond` then runs both
+    branches (the TCA's fallback solves among them) and each `while_loop` selects in its
+    body, which costs equations and time for nothing."""
+    if jax.tree_util.tree_leaves(xs)[0].shape[0] != 1:
+        return jax.vmap(fn, out_axes=out_axis)(*xs)
+    out = fn(*jax.tree_util.tree_map(lambda x: x[0], xs))
+    return jax.tree_util.tree_map(lambda y: jnp.expand_dims(y, out_axis), out)
 
 
 def _loads(scene: Scene, torques, torques_Nm) -> np.ndarray:
