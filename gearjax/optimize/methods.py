@@ -49,13 +49,6 @@ def register(cls: type[SearchMethod]) -> type[SearchMethod]:
     return cls
 
 
-def method_named(name: str) -> type[SearchMethod]:
-    """The registered method `name`; a `ValueError` naming the registered ones otherwise."""
-    if name not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(map(repr, sorted(METHODS)))}; got {name!r}")
-    return METHODS[name]
-
-
 @dataclasses.dataclass(frozen=True)
 class SearchMethod(abc.ABC):
     """A search method with its settings (`config`).
