@@ -38,10 +38,12 @@ from .geometry.depth import FlankDepth as FlankDepth
 from .geometry.errors import MeshErrors as MeshErrors
 from .geometry.modification import FlankModification as FlankModification
 from .impact import (
+    ImpactBranches as ImpactBranches,
     ImpactRegime as ImpactRegime,
     ImpactResult as ImpactResult,
     LocalStiffness as LocalStiffness,
     impact_analysis as impact_analysis,
+    impact_branches as impact_branches,
 )
 from .ltca import (
     AbstractCompliance as AbstractCompliance,

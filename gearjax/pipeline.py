@@ -39,7 +39,7 @@ import numpy as np
 from ._solution import RESULTS, SimulationError, enum_message, enum_name
 from ._validate import is_concrete
 from .accuracy import Accuracy
-from .impact import ImpactResult, impact_analysis
+from .impact import ImpactBranches, ImpactResult, impact_analysis, impact_branches
 from .ltca import LTCAResult, loaded_contact_analysis
 from .runtime.program_cache import cached_call
 from .runtime.resources import check_memory
@@ -81,6 +81,16 @@ def impact(scene: Scene, pair, tca: TCAResult, ltca: LTCAResult, torque, speed, 
         result = impact_analysis(pair, scene.depth, tca, ltca, torque=torque, speed=speed, model=scene.contact_model,
                                  pairs=scene.pairs, inertia=scene.inertia)
     return guarded(result, checks)
+
+
+def branches(scene: Scene, pair, tca: TCAResult, ltca: LTCAResult, torque, speed, checks=()) -> ImpactBranches:
+    """The impact on both branches of the mesh-in regime switch and the switching function
+    (`impact.branches`), as the impact stage, guarded by `checks`."""
+    with jax.named_scope("stage_impact_branches"):
+        both = impact_branches(pair, scene.depth, tca, ltca, torque=torque, speed=speed, model=scene.contact_model,
+                               pairs=scene.pairs, inertia=scene.inertia)
+    switch = jnp.where(passed(checks), both.switch, jnp.nan)
+    return ImpactBranches(guarded(both.flank, checks), guarded(both.edge, checks), switch)
 
 
 def run(scene: Scene) -> SimulationResult:
@@ -146,15 +156,21 @@ def operating_checks(*values) -> tuple:
     return tuple((jnp.isfinite(v) & (v >= 0), RESULTS.invalid_operating_point) for v in values if v is not None)
 
 
+def passed(checks):
+    """Whether every check of `checks` passes (a boolean array; True without checks)."""
+    ok = jnp.asarray(True)
+    for good, _ in checks:
+        ok = ok & good
+    return ok
+
+
 def guarded(stage, checks):
     """`stage` (a result with a `result` code) with NaN outputs and the first failed check's
     code where any check fails; unchanged without checks. The gradient where every check
     passes is the stage's own."""
     if not checks:
         return stage
-    ok = jnp.asarray(True)
-    for good, _ in checks:
-        ok = ok & good
+    ok = passed(checks)
     code = stage.result
     for good, failure in reversed(checks):  # the first failed check names the failure
         code = RESULTS.where(good, code, failure)

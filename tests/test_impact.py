@@ -442,3 +442,45 @@ def test_seed001_reproduction_sets_gearjax_beside_table4(seed_pair):
     text = summary(out)
     assert "not checked against a finer setting" in text and "261.0 mm" in text
     assert f"{standard[1]['force_N']:7.0f} N" in text
+
+
+def test_both_branches_of_the_regime_switch_and_their_tangents(seed_pair):
+    """`impact_branches` on both sides of the switch of the paper's design (near 521 N·m at
+    this accuracy; both branches step between 522.0 and 522.4 N·m, where the local
+    stiffness fit's coefficient steps by 0.3 %, and past 524 N·m, where the loaded pairs'
+    rate does: the points stay clear of both): the switching function's sign is the regime `simulate` finds, the branch
+    that strikes gives its force, both branches exist on both sides, and the tangents of
+    F_flank, F_edge and s along one direction (torque and the pinion's root relief
+    together: implicit derivatives of each branch's search) match central differences."""
+    from gearjax import pipeline
+    from gearjax.optimize.space import modification_from_design
+
+    base = pipeline.prepare(scene(seed_pair, PAPER, 517.0))
+
+    def branches(t):
+        # t: N·m from 517 along the direction (1 N·m, 0.001 µm of root relief) per unit
+        y = PAPER.at[0].add(1e-6 * t)
+        s = eqx.tree_at(lambda s: (s.modification, s.operating.torque), base,
+                        (modification_from_design(y), base.operating.torque + 1e3 * t))
+        pair = s.pair.resolve()
+        tca = pipeline.unloaded(s, pair)
+        ltca = pipeline.loaded(s, pair, tca, s.operating.torque)
+        both = pipeline.branches(s, pair, tca, ltca, s.operating.torque, s.operating.speed)
+        codes = jnp.stack([both.flank.result._value, both.edge.result._value])
+        return jnp.stack([both.flank.force, both.edge.force, both.switch]), codes
+
+    tangent = jax.jit(lambda t: jax.jvp(branches, (t,), (jnp.ones_like(t),), has_aux=True))
+    h = 0.05
+    for t, regime in ((0.0, "surface"), (6.5, "edge")):
+        t = jnp.asarray(t, float)
+        values, d_values, codes = tangent(t)
+        assert np.all(np.asarray(codes) == 0), "both branches' searches succeed"
+        flank, edge, switch = (float(v) for v in values)
+        y = PAPER.at[0].add(1e-6 * float(t))
+        hit = impact(seed_pair, y, 517.0 + float(t))
+        assert hit.regime_name == regime
+        assert (switch >= 0.0) == (regime == "surface")
+        assert float(hit.force) == pytest.approx(flank if switch >= 0.0 else edge, rel=1e-6)
+        fd = (np.asarray(tangent(t + h)[0]) - np.asarray(tangent(t - h)[0])) / (2 * h)
+        assert np.all(np.abs(fd) > 0.0)
+        assert np.asarray(d_values) == pytest.approx(fd, rel=2e-3)

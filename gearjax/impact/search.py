@@ -1,64 +1,63 @@
 r"""The first contact of the incoming tooth pair under load: bracket, root search, gradients.
 
 **First contact.** Follow one tooth pair $k$ as the pinion turns. Its flank, tip-edge and
-face-end candidates would touch at the gear offsets $\Delta_k(z, \varphi_1)$ of the
-unloaded TCA along the face, while the pairs already in mesh hold the gear at their loaded
-transmission error $\mathrm{LTE}_{\neg k}(\varphi_1)$, computed by the LTCA with pair $k$
-unloaded. Pair $k$ is clear while
+face-end candidates would touch at the gear offsets $\Delta_k(z, \varphi_1)$ of the unloaded
+TCA along the face, while the pairs already in mesh hold the gear at their loaded transmission
+error $\mathrm{LTE}_{\neg k}(\varphi_1)$, computed by the LTCA with pair $k$ unloaded. Pair
+$k$ is clear while
 
 $$H(\varphi_1) = \max_z \Delta_k(z, \varphi_1) - \mathrm{LTE}_{\neg k}(\varphi_1) < 0,$$
 
-i.e. while its rigid gap (geometry, modifications, errors) exceeds the loaded approach of
-the others, and first touches at the root $\varphi_1^*$ of $H$. The maximum over the face
-is continuous in $z$ (`tca.face_peak`: around the best slice, the face ends included), not
-the best slice's: a tip edge crossing a short relief touches over a stretch of the face
-narrower than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the
-first upward crossing (with pair $k$ unloaded before its first contact, the scene's LTE
-equals $\mathrm{LTE}_{\neg k}$ there, up to the TE the search's loaded contact counts
-from: the largest slice value, unrefined between the slices). The first touching
-candidate gives the point M at $z^*$, its normal and the **regime**: `edge` when it is a
-tip edge, `surface` when it is a flank point. The same search serves every tooth family;
-on point-contact flanks (double circular arc) the incoming pair's touching point is the one
-the loaded contact locates between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$
-counts from the same located peaks.
+i.e. while its rigid gap (geometry, modifications, errors) exceeds the loaded approach of the
+others, and first touches at the root $\varphi_1^*$ of $H$. The maximum over the face is
+continuous in $z$ (`tca.face_peak`: around the best slice, the face ends included), not the
+best slice's: a tip edge crossing a short relief touches over a stretch of the face narrower
+than the slices' spacing. The cycle grid of the scene's TCA/LTCA brackets the first upward
+crossing (with pair $k$ unloaded before its first contact, the scene's LTE equals
+$\mathrm{LTE}_{\neg k}$ there, up to the TE the search's loaded contact counts from: the
+largest slice value, unrefined between the slices). The first touching candidate gives the
+point M at $z^*$, its normal and the **regime**: `edge` when it is a tip edge, `surface` when
+it is a flank point. The same search serves every tooth family; on point-contact flanks
+(double circular arc) the incoming pair's touching point is the one the loaded contact locates
+between the slices (`point_peak`), and $\mathrm{LTE}_{\neg k}$ counts from the same located
+peaks.
 
-**Root search.** $H$ is smooth on each side of a regime switch (it kinks where the
-binding slice or candidate changes, or where the LTCA's active set does), so a
-safeguarded Newton iteration finds $\varphi_1^*$ in a handful of steps (Numerical
-Recipes' `rtsafe`). Each step runs TCA and LTCA at the pinion angle and at its neighbours
-$\pm h$ in one call (`evaluate`): the rate $\mathrm{LTE}_{\neg k}'$ is the central
-difference there, $\Delta_k'$ the touching offset's rate at the first touching point
-(envelope theorem: the normal relative velocity over the gear's arm), and so $H'$. No
-forward-mode pass: the rates cost a position axis of three, not a second trace. The
-bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$, starts as the grid
-step and moves its end of the same sign to every evaluated point; the first point is the
-regula-falsi point of the grid values; the next is the Newton point
-$\varphi - H/H'$ when it lies inside the bracket and is at most half the previous step,
-else the bracket's midpoint (bisection), so the search never leaves the bracket and its
-steps at least halve. It has converged when $|H| \le$ atol and the Newton step or the
-bracket is below atol + rtol $|\varphi_1|$ (`Accuracy.newton_atol`, `newton_rtol`);
-`Accuracy.impact_max_steps` caps the evaluations, `ImpactResult.search_steps` counts
-them. Where the bracket, both ends evaluated, shrinks below that tolerance while $H$
-rises across it by more than atol and by far more than its end slopes allow, $H$
-**jumps** across zero and has no root: e.g. the loaded TE of the pairs in mesh drops
-below the incoming pair's offset in one step (a pair's contact leaves its flank), so the
-gear swings through the step, freely or on the remaining pairs, until the incoming pair
-stops it. That dynamic strike is not the quasi-static mesh-in this module models: the
-search stops and the impact's result is `first_contact_jump`. A jump is found by
-bisection, so it takes about as many evaluations as the bracket has bits above the
-tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged.
-The values at the last evaluated point, rates included, are the first contact's:
-the search is the only place the TCA/LTCA at the search's angle is traced in a program
-that is not differentiated. The loop is a `lax.while_loop` with a result code, no
-callbacks.
+**Root search.** $H$ is smooth on each side of a regime switch (it kinks where the binding
+slice or candidate changes, or where the LTCA's active set does), so a safeguarded Newton
+iteration finds $\varphi_1^*$ in a handful of steps (Numerical Recipes' `rtsafe`). Each step
+runs TCA and LTCA at the pinion angle and at its neighbours $\pm h$ in one call (`evaluate`):
+the rate $\mathrm{LTE}_{\neg k}'$ is the central difference there, $\Delta_k'$ the touching
+offset's rate at the first touching point (envelope theorem: the normal relative velocity over
+the gear's arm), and so $H'$. No forward-mode pass: the rates cost a position axis of three,
+not a second trace. The bracket $[\varphi_l, \varphi_u]$, $H(\varphi_l) < 0 \le H(\varphi_u)$,
+starts as the grid step and moves its end of the same sign to every evaluated point; the first
+point is the regula-falsi point of the grid values; the next is the Newton point $\varphi -
+H/H'$ when it lies inside the bracket and is at most half the previous step, else the
+bracket's midpoint (bisection), so the search never leaves the bracket and its steps at least
+halve. It has converged when $|H| \le$ atol and the Newton step or the bracket is below atol +
+rtol $|\varphi_1|$ (`Accuracy.newton_atol`, `newton_rtol`); `Accuracy.impact_max_steps` caps
+the evaluations, `ImpactResult.search_steps` counts them. Where the bracket, both ends
+evaluated, shrinks below that tolerance while $H$ rises across it by more than atol and by far
+more than its end slopes allow, $H$ **jumps** across zero and has no root: e.g. the loaded TE
+of the pairs in mesh drops below the incoming pair's offset in one step (a pair's contact
+leaves its flank), so the gear swings through the step, freely or on the remaining pairs,
+until the incoming pair stops it. That dynamic strike is not the quasi-static mesh-in this
+module models: the search stops and the impact's result is `first_contact_jump`. A jump is
+found by bisection, so it takes about as many evaluations as the bracket has bits above the
+tolerance (26–29 at `default`); beyond `impact_max_steps` it is reported unconverged. The
+values at the last evaluated point, rates included, are the first contact's: the search is the
+only place the TCA/LTCA at the search's angle is traced in a program that is not
+differentiated. The loop is a `lax.while_loop` with a result code, no callbacks. With
+`SearchContext.branch` the incoming pair's first touching point is held to one branch of the
+regime switch (`tca.branch`, `impact.branches`).
 
-Gradients of $\varphi_1^*$ follow from the implicit function theorem,
-$\mathrm d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$, through a custom JVP
-(the iteration itself is not differentiated): differentiating evaluates the contact at
-the root once more, along the parameters' tangent and the root's together, so every
-output $Q$, the rates in the impact velocity included, changes by
-$\dot Q_\theta + Q'\dot\varphi_1^*$ (one first-order forward-mode pass). Where
-$H_\varphi = 0$ (zero load on perfect flanks: tangential engagement) it is set to zero.
+Gradients of $\varphi_1^*$ follow from the implicit function theorem, $\mathrm
+d\varphi_1^*/\mathrm d\theta = -H_\theta/H_{\varphi}$, through a custom JVP (the iteration
+itself is not differentiated): differentiating evaluates the contact at the root once more,
+along the parameters' tangent and the root's together, so every output $Q$, the rates in the
+impact velocity included, changes by $\dot Q_\theta + Q'\dot\varphi_1^*$ (one first-order
+forward-mode pass). Where $H_\varphi = 0$ (zero load on perfect flanks: tangential engagement)
+it is set to zero.
 """
 
 from __future__ import annotations
@@ -75,17 +74,19 @@ from ..ltca.model import ContactModel
 from ..ltca.point_analysis import closest_contact
 from ..tca import TCAResult, tooth_contact_analysis
 from ..tca._slice_problem import SliceContact, kind_index
+from ..tca.branch import Branch
 from ..tca.face_peak import FacePeak, face_peak
 
 
 class SearchContext(eqx.Module):
-    """What a single-position evaluation needs (static settings kept static)."""
+    """What a single-position evaluation needs (static settings static; `branch`: `tca.branch`)."""
 
     pair: eqx.Module
     depth: eqx.Module
     torque: Scalar
     model: ContactModel
     pairs: tuple[int, ...] = eqx.field(static=True)
+    branch: str | None = eqx.field(static=True, default=None)
 
 
 class _Contact(eqx.Module):
@@ -111,9 +112,8 @@ class _Contact(eqx.Module):
 
 
 def rate_step(pair, dtype):
-    """Step $h$ (rad) of the central difference that gives $\\mathrm{LTE}_{\\neg k}'$: $\\epsilon^{1/3}$
-    of the pinion's angular pitch (1.3e-6 rad, seed 001 pair, float64), where truncation and
-    rounding balance."""
+    """Step $h$ (rad) of the central difference for $\\mathrm{LTE}_{\\neg k}'$: $\\epsilon^{1/3}$ of the
+    pinion's angular pitch (1.3e-6 rad, seed pair, float64), where truncation and rounding balance."""
     return float(jnp.finfo(dtype).eps) ** (1.0 / 3.0) * pair.angular_pitch(0)
 
 
@@ -131,8 +131,8 @@ def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
     the normal relative velocity per unit pinion speed over the gear's arm (for point
     contacts, whose peak is interpolated between slices, the central difference of the
     located peaks, one-sided where the pair touches on one side only)."""
-    acc = ctx.model.accuracy
-    h = rate_step(ctx.pair, jnp.result_type(phi1))
+    acc, h = ctx.model.accuracy, rate_step(ctx.pair, jnp.result_type(phi1))
+    branch = None if ctx.branch is None else Branch(jnp.asarray(ctx.pairs)[column], ctx.branch)
     # The TCA's TE is only the reference the loaded TE counts from, so it is not refined
     # between slices: a shift of it cancels but for a small fraction (decision 0014).
     grid = tooth_contact_analysis(ctx.pair, ctx.depth, accuracy=acc, pairs=ctx.pairs,
@@ -159,7 +159,7 @@ def evaluate(ctx: SearchContext, column, phi1) -> tuple[_Contact, tuple]:
         return contact, (j, solved)
     spacing = ctx.pair.face_width / acc.face_slices
     peak = face_peak(ctx.pair, ctx.depth, acc, jnp.asarray(ctx.pairs)[column], phi1, tca.slice_z[j], offsets[j],
-                     spacing)
+                     spacing, branch)
     _, q_arm = moment_arms(peak.pinion_point, peak.normal, ctx.pair.center(1))
     touching = jnp.isfinite(peak.te)
     te_slope = jnp.where(touching, safe_divide(jnp.dot(peak.relative_velocity, peak.normal), q_arm), 0.0)

@@ -47,6 +47,7 @@ from ._slice_problem import (
     _weighted_residual,
     _within,
 )
+from .branch import on_extended_flanks
 
 
 def _starts(problem: SliceProblem):
@@ -243,9 +244,13 @@ def solve_again(problem: SliceProblem, candidate, solver: optx.AbstractRootFinde
     return value, ok, failed | (again & relevant)
 
 
-def select_contact(pair: AbstractFlankPair, values, converged, failed) -> SliceContact:
-    """Keep the first contact among the valid candidates (largest offset)."""
+def select_contact(pair: AbstractFlankPair, values, converged, failed, rule=None) -> SliceContact:
+    """Keep the first contact among the valid candidates (largest offset); `rule`, a
+    `Branch.rule` of the slice's pair, holds it to one branch of the regime switch."""
     ok = converged & _on_active_flanks(pair, values)
+    if rule is not None:
+        allowed, extended = rule
+        ok = allowed & jnp.where(extended, converged & on_extended_flanks(pair, values), ok)
     # On ties (flank contact exactly at a tip) argmax keeps the first: the flank.
     kind = jnp.argmax(jnp.where(ok, values[:, 2], -jnp.inf))
     any_ok = jnp.any(ok)

@@ -42,6 +42,7 @@ from ..geometry._base import AbstractGearPair
 from ..geometry.depth import FlankDepth
 from ._slice import attach_derivatives, select_contact, solve_again, solve_candidates
 from ._slice_problem import FLANK, SliceContact, _contact_residual, contact_kind, make_problem
+from .branch import Branch
 from .grid import face_slices, pair_window, positions
 from .peak import explicit_peak_correction, peak_correction
 from .result import TCAResult, _tca_result, merge_zones
@@ -138,13 +139,15 @@ def on_grid(f, phi, ks, z, *fields):
     return jax.vmap(f, (0, None, None, *rest))(phi, ks, z, *fields)
 
 
-def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None) -> SliceContact:
+def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None, branch: Branch | None = None
+               ) -> SliceContact:
     """The general TCA's first contact of every slice, (pos, pair, slice): the three
     candidates solved with Newton, the failed ones again with the damped fallback
     (`_retry_failed`), the first contact kept (`select_contact`), all on stop-gradient'ed
     data; the kept contact then gets the derivatives of its own root
     (`attach_derivatives`), so that a derivative of the TCA traces neither the solves nor
-    the choice between them. `zone_axis`: as in `_retry_failed`."""
+    the choice between them. `zone_axis`: as in `_retry_failed`; `branch` holds one pair
+    to one branch of the regime switch (`select_contact`)."""
     rtol, atol = accuracy.newton_tolerances(jnp.result_type(phi))
     steps = accuracy.newton_max_steps
     fixed_pair, fixed_depth, fixed_phi, fixed_z = jax.lax.stop_gradient((pair, depth, phi, z))
@@ -155,7 +158,11 @@ def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None) -> S
 
     candidates = _retry_failed(fixed_pair, fixed_depth, fixed_phi, ks, fixed_z, on_grid(one, fixed_phi, ks, fixed_z),
                                SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps), zone_axis)
-    contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
+    if branch is None:
+        contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
+    else:
+        contact = on_grid(lambda _, k, __, *c: select_contact(fixed_pair, *c, rule=branch.rule(k)),
+                          fixed_phi, ks, fixed_z, *candidates)
     return attach_grid(pair, depth, phi, ks, z, contact)
 
 

@@ -79,14 +79,15 @@ class FacePeak(eqx.Module):
     relative_velocity: Array
 
 
-def slice_values(pair, depth, accuracy, k, phi1, zs) -> tuple[SliceContact, Array]:
+def slice_values(pair, depth, accuracy, k, phi1, zs, branch=None) -> tuple[SliceContact, Array]:
     """The contacts of pair `k`'s slices at the axial positions `zs` (n,) and their values
     $g(z)$ (n,; rad, `-inf` where no candidate touches on the active flanks), solved as the
     TCA solves its grid (`analysis.solve_grid`: the damped fallback included, without which
     a flank solve that ran past the tip leaves the edge as the slice's contact, and $g$
-    jumps by up to 3e-4 rad)."""
+    jumps by up to 3e-4 rad); `branch` as there."""
     if accuracy.tca_method == "surface":
-        contact = jax.tree_util.tree_map(lambda x: x[0, 0], solve_grid(pair, depth, accuracy, phi1[None], k[None], zs))
+        grid = solve_grid(pair, depth, accuracy, phi1[None], k[None], zs, branch=branch)
+        contact = jax.tree_util.tree_map(lambda x: x[0, 0], grid)
     else:
         contact = jax.vmap(lambda zz: _plane_of_action_slice(pair, depth, k, zz, phi1))(zs)
     return contact, _values(pair, contact, zs)
@@ -98,10 +99,11 @@ def _values(pair, contact: SliceContact, zs):
     return jnp.where(contact.valid, contact.offset + jax.vmap(ft.partial(_lead_correction, pair))(zs), -jnp.inf)
 
 
-def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FacePeak:
+def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing, branch=None) -> FacePeak:
     """Maximise pair `k`'s slice value over `[z_best - spacing, z_best + spacing]` clipped to
     the face (see the module docstring); `z_best`, `te_best` are the best slice's position
-    and value, kept where the search finds nothing higher."""
+    and value, kept where the search finds nothing higher; `branch` holds the pair to one
+    branch of the regime switch (`tca.branch`)."""
     half, step = 0.5 * pair.face_width, FD_STEP * spacing
     k = as_float(k)
     # the search sees no derivative at all
@@ -115,7 +117,7 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
     fractions = jnp.linspace(0.0, 1.0, GRID_POINTS, dtype=z0.dtype)
     around = fixed_step * jnp.zeros(GRID_POINTS, z0.dtype).at[:3].set(jnp.array([-1.0, 0.0, 1.0], z0.dtype))
     # One trace of the slice solve serves every round and the shape of the loop's carry.
-    solve = eqx.filter_closure_convert(lambda zs: slice_values(*frozen, accuracy, k, fixed_phi, zs), fractions)
+    solve = eqx.filter_closure_convert(lambda zs: slice_values(*frozen, accuracy, k, fixed_phi, zs, branch), fractions)
 
     def interior(z):
         return (z - fixed_step > -fixed_half) & (z + fixed_step < fixed_half)
@@ -150,7 +152,7 @@ def face_peak(pair, depth, accuracy, k, phi1, z_best, te_best, spacing) -> FaceP
             pair, depth, phi1[None], k[None], zs, jax.tree_util.tree_map(lambda x: x[None, None], found)))
         gs = _values(pair, contacts, zs)
     else:
-        contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs)
+        contacts, gs = slice_values(pair, depth, accuracy, k, phi1, zs, branch)
     shift, te, contact = _vertex(contacts, gs, step, interior(z_star))
     x1, x2, n, v12, _ = contact_point(pair, depth, phi1, k, z_star + shift, contact.pinion_parameter,
                                       contact.gear_parameter, jnp.where(jnp.isfinite(te), te, 0.0))
