@@ -28,6 +28,12 @@ Methods:
   box-bounded; non-finite values are given to it as 1e6 N.
 * `differential_evolution`: SciPy's, population 30 (popsize 5), `vectorized`,
   `updating="deferred"`, no polish; non-finite values as 1e6 N.
+* `switch`: gearjax's switching-aware SQP (`gearjax.optimize.switch`: min F_flank subject
+  to every load's switching function s >= 0.05 mm), 6 start slots that start again once
+  converged or stalled; one call of the flank branch's value and Jacobian
+  (`switch_values`) per iteration, counted as `switch_cost` evaluations per design (its
+  measured time over a forward call of the same designs); a design enters the run's log
+  only where its flanks strike first at every load (there J_flank is the objective).
 
 Certification: the running best design of each run at the checkpoints (a fixed grid of
 evaluation counts, CHECKPOINTS, and the run's end) is evaluated again at the
@@ -64,10 +70,12 @@ import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
 from gearjax.optimize.batch import batch_objective, batch_objective_in_chunks, batch_value_and_grad  # noqa: E402
 from gearjax.optimize.certification import certification_accuracy, with_accuracy  # noqa: E402
+from gearjax.optimize.switch import switch_init, switch_update, switch_values  # noqa: E402
 from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
 OBJECTIVES = {"force_1000": [1000.0], "spectrum": [400.0, 1000.0, 1600.0]}
-METHODS = ("ga", "gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es", "differential_evolution")
+METHODS = ("ga", "gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es", "differential_evolution",
+           "switch")
 CHECKPOINTS = (25, 50, 75, 100, 150, 200, 300, 400, 600, 800, 1000, 1200, 1600, 2400)
 GRADIENT_METHODS = ("gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient")
 CHUNK = STARTS = 10  # designs per program call; gradient starts
@@ -85,8 +93,9 @@ class Counter:
     """Counts evaluations and logs every improvement of the running best (evaluations at
     it, value, unit-cube design) of one run."""
 
-    def __init__(self, objective, space, budget, gradient_cost):
+    def __init__(self, objective, space, budget, gradient_cost, switch_cost=1.0):
         self.objective, self.space, self.budget, self.gradient_cost = objective, space, budget, gradient_cost
+        self.switch_cost = switch_cost
         self.evaluations, self.best, self.log = 0.0, np.inf, []
 
     @property
@@ -105,6 +114,14 @@ class Counter:
         units = np.clip(np.atleast_2d(np.asarray(units, float)), 0.0, 1.0)
         values = batch_objective_in_chunks(self.objective, self.space.to_design(jnp.asarray(units)), CHUNK)
         self._note(units, values, 1.0)
+        return values
+
+    def switch_values(self, units):
+        """`switch_values` at unit-cube points; the flank branch's objective is noted where
+        every switching function is >= 0 (there it is the objective)."""
+        values = switch_values(self.objective, self.space, jnp.asarray(units))
+        J, _, s, _ = (np.asarray(v) for v in values)
+        self._note(np.asarray(units), np.where(np.all(s >= 0.0, axis=-1), J, np.inf), self.switch_cost)
         return values
 
     def value_and_grad(self, units):
@@ -215,10 +232,23 @@ def run_de(counter: Counter, seed: int) -> None:
                            init="latinhypercube")
 
 
+_switch_update = eqx.filter_jit(switch_update)
+
+
+def run_switch(counter: Counter, seed: int, starts: int = 6) -> None:
+    """gearjax's switching-aware SQP (`switch_init`, `switch_values`, `switch_update`, as
+    `gearjax optimize --method switch` runs it) until the budget cannot pay another call."""
+    config = go.SwitchConfig(starts=starts, iterations=10**6)
+    constraints = int(counter.objective.torques.shape[0]) * counter.objective.samples
+    state = switch_init(jax.random.PRNGKey(seed), config, constraints, None, jnp.float64)
+    while counter.left >= starts * counter.switch_cost:
+        state = _switch_update(state, counter.switch_values(state.trial), config)
+
+
 RUNNERS = {"ga": run_ga, "gradient": run_gradient, "gradient_restarts": run_gradient_restarts,
            "gradient_smoothed": run_gradient_smoothed,
            "ga_gradient": run_ga_gradient, "cma_es": run_cma,
-           "differential_evolution": run_de}
+           "differential_evolution": run_de, "switch": run_switch}
 
 
 def gradient_cost(objective, space, repeats: int = 3) -> dict:
@@ -239,6 +269,26 @@ def gradient_cost(objective, space, repeats: int = 3) -> dict:
     forward = median(lambda: batch_objective(objective, designs))
     both = median(lambda: batch_value_and_grad(objective, space, units))
     return {"forward_s": forward, "value_and_grad_s": both, "ratio": both / forward}
+
+
+def switch_cost(objective, space, repeats: int = 3) -> dict:
+    """Time of a `switch_values` call (flank branch's value and Jacobian) of STARTS designs
+    over a forward call of the same designs (compiled apart, medians)."""
+    units = jax.random.uniform(jax.random.PRNGKey(7), (STARTS, 6), jnp.float64)
+    designs = space.to_design(units)
+    forward = _median(lambda: batch_objective(objective, designs), repeats)
+    both = _median(lambda: switch_values(objective, space, units), repeats)
+    return {"forward_s": forward, "switch_values_s": both, "ratio": both / forward}
+
+
+def _median(fn, repeats: int) -> float:
+    jax.block_until_ready(fn())
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn())
+        runs.append(time.perf_counter() - t0)
+    return statistics.median(runs)
 
 
 def load_runs() -> dict:
@@ -454,12 +504,18 @@ def main() -> None:
             cost = data["gradient_cost"][name] = gradient_cost(objective, space)
             save_runs(data)
             print(f"{name}: value and gradient cost {cost['ratio']:.2f} forward calls", flush=True)
+        switch = data.setdefault("switch_cost", {}).get(name)
+        if switch is None and "switch" in args.methods:
+            switch = data["switch_cost"][name] = switch_cost(objective, space)
+            save_runs(data)
+            print(f"{name}: flank branch's value and Jacobian cost {switch['ratio']:.2f} forward calls", flush=True)
         for seed in range(args.seeds):
             for method in args.methods:
                 key = f"{name}/{method}/{seed}"
                 if key in data["runs"]:
                     continue
-                counter = Counter(objective, space, args.budget, cost["ratio"] if cost else 1.0)
+                counter = Counter(objective, space, args.budget, cost["ratio"] if cost else 1.0,
+                                  switch["ratio"] if switch else 1.0)
                 t0 = time.perf_counter()
                 RUNNERS[method](counter, seed)
                 wall = time.perf_counter() - t0
@@ -479,7 +535,8 @@ def main() -> None:
     checks = add_finer(data, objectives, finer) if finer else {}
     checkpoints = [c for c in CHECKPOINTS if c < args.budget] + [args.budget]
     out = {"machine": machine(),
-           "settings": {**settings, "checkpoints": checkpoints, "gradient_cost": data.get("gradient_cost", {})},
+           "settings": {**settings, "checkpoints": checkpoints, "gradient_cost": data.get("gradient_cost", {}),
+                        "switch_cost": data.get("switch_cost", {})},
            "best_certified_N": best, "finer_check": checks, "objectives": objectives}
     (RESULTS / "optimize_methods.json").write_text(json.dumps(out, indent=1, allow_nan=False))
     print(markdown(objectives, best))

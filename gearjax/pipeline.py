@@ -83,14 +83,17 @@ def impact(scene: Scene, pair, tca: TCAResult, ltca: LTCAResult, torque, speed, 
     return guarded(result, checks)
 
 
-def branches(scene: Scene, pair, tca: TCAResult, ltca: LTCAResult, torque, speed, checks=()) -> ImpactBranches:
+def branches(scene: Scene, pair, tca: TCAResult, ltca: LTCAResult, torque, speed, checks=(),
+             edge: bool = True) -> ImpactBranches:
     """The impact on both branches of the mesh-in regime switch and the switching function
-    (`impact.branches`), as the impact stage, guarded by `checks`."""
+    (`impact.branches`; the flank branch and the switch only with `edge=False`), as the
+    impact stage, guarded by `checks`."""
     with jax.named_scope("stage_impact_branches"):
         both = impact_branches(pair, scene.depth, tca, ltca, torque=torque, speed=speed, model=scene.contact_model,
-                               pairs=scene.pairs, inertia=scene.inertia)
+                               pairs=scene.pairs, inertia=scene.inertia, edge=edge)
     switch = jnp.where(passed(checks), both.switch, jnp.nan)
-    return ImpactBranches(guarded(both.flank, checks), guarded(both.edge, checks), switch)
+    return ImpactBranches(guarded(both.flank, checks), None if both.edge is None else guarded(both.edge, checks),
+                          switch)
 
 
 def run(scene: Scene) -> SimulationResult:

@@ -126,6 +126,24 @@ def test_gradient_matches_central_differences_in_both_regimes(objective, space, 
         np.testing.assert_allclose(grads[k], central, rtol=1e-4, atol=1e-4 * scale)
 
 
+def test_the_flank_branch_is_the_objective_where_the_flanks_strike_first(objective, designs, batch_values):
+    """`Objective.evaluate(..., flank_branch=True)` (what the switch method minimises): where
+    its switching function s is >= 0 the flanks strike first and J of the flank branch is
+    J itself; where s < 0 the ordinary evaluation strikes with the tip edge."""
+    import jax
+
+    flank = jax.jit(lambda ds: jax.lax.map(lambda d: objective.evaluate(d, flank_branch=True), ds))(
+        jnp.asarray(designs))
+    ordinary = _batch_evaluation(objective, designs)  # the batch program of `batch_values`
+    switch, edge = np.asarray(flank.switch)[:, 0, 0], np.asarray(ordinary.edge)[:, 0, 0]
+    ok = np.isfinite(batch_values) & np.isfinite(np.asarray(flank.objective))
+    assert np.all(np.isfinite(switch[ok])) and 0 < np.sum(switch[ok] >= 0.0) < np.sum(ok)
+    np.testing.assert_array_equal(switch[ok] < 0.0, edge[ok])
+    flanks = ok & (switch >= 0.0)
+    np.testing.assert_allclose(np.asarray(flank.objective)[flanks], batch_values[flanks], rtol=1e-9)
+    assert ordinary.switch is None and not np.any(np.asarray(flank.edge))
+
+
 def test_ga_best_never_worsens_and_improves_on_the_first_population(ga_run, space):
     result, run_dir = ga_run
     history = np.asarray(result.history)
@@ -438,6 +456,8 @@ def _scene_file(tmp_path, optimize: str) -> str:
         ("tip_relief_um = [50.0, 10.0]\n", "tip_relief"),
         ("colour = 'red'\n", "[optimize] colour:"),
         ("certify = 'exact'\n", "[optimize] certify:"),
+        ("method = 'switch'\nobjective = 'lte'\n", "[optimize] method = \"switch\""),
+        ("method = 'switch'\nswitch_margin_mm = -0.1\n", "[optimize] switch_margin_mm:"),
     ],
 )
 def test_cli_rejects_a_bad_optimize_section(tmp_path, capsys, optimize, field):

@@ -46,13 +46,14 @@ class ImpactBranches(eqx.Module):
 
     Attributes:
         flank: the impact of the flank branch (`ImpactResult`; `regime` surface).
-        edge: the impact of the tip-edge branch (`ImpactResult`; `regime` edge).
+        edge: the impact of the tip-edge branch (`ImpactResult`; `regime` edge), or None
+            where it was not asked for (`impact_branches(..., edge=False)`).
         switch: $s = u_{\\text{tip},2} - u_2^*$ of the flank branch (mm of the gear's roll
             length): > 0 where the flanks strike first, < 0 where the tip edge does.
     """
 
     flank: ImpactResult
-    edge: ImpactResult
+    edge: ImpactResult | None
     switch: Scalar
 
     @property
@@ -63,6 +64,8 @@ class ImpactBranches(eqx.Module):
     @property
     def force(self) -> Scalar:
         """The impact force of the branch that strikes (N): the scene's `ImpactResult.force`."""
+        if self.edge is None:
+            raise ValueError("the force of the branch that strikes needs both branches (impact_branches(..., edge=True))")
         return jnp.where(self.flank_strikes, self.flank.force, self.edge.force)
 
 
@@ -77,9 +80,11 @@ def impact_branches(
     model: ContactModel,
     pairs: tuple[int, ...],
     inertia=None,
+    edge: bool = True,
 ) -> ImpactBranches:
     """The impact on both branches of the regime switch and the switching function, with
-    the arguments of `impact_analysis` (a pair of one contact zone, line contact)."""
+    the arguments of `impact_analysis` (a pair of one contact zone, line contact); with
+    `edge=False` the flank branch and the switch only (one first-contact search)."""
     if ltca.point_contact is not None or len(pair.contact_zones()) != 1:
         raise ValueError(f"impact_branches needs a line-contact pair of one contact zone (an involute family); "
                          f"got {type(pair).__name__}")
@@ -91,6 +96,6 @@ def impact_branches(
         search = first_contact(ctx, column, lower, upper, gap_lower, gap_upper, found)
         return _impact_at(ctx, column, search, speed, inertia, found)
 
-    flank, edge = side("flank"), side("edge")
+    flank = side("flank")
     tip = pair.profile_limits(1)[1]
-    return ImpactBranches(flank, edge, tip - flank.gear_parameter)
+    return ImpactBranches(flank, side("edge") if edge else None, tip - flank.gear_parameter)

@@ -3,7 +3,8 @@
 The pipeline: a `DesignSpace` (bounds, unit-cube coordinates) → an `Objective` (a pure
 function of the design vector over a load spectrum and error samples) → an optimiser
 (`minimize` with a registered `SearchMethod` of `gearjax.optimize.methods`: `genetic`, the
-GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected Adam) that writes
+GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected Adam; `SwitchSearch`,
+an SQP on the flank branch of the mesh-in regime switch) that writes
 every step to a run directory and resumes exactly → a certification of
 its best designs at a finer accuracy (`certify`), which picks the result.
 """
@@ -52,6 +53,7 @@ from .methods import METHODS as METHODS
 from .methods import GeneticSearch as GeneticSearch
 from .methods import GradientSearch as GradientSearch
 from .methods import SearchMethod as SearchMethod
+from .methods import SwitchSearch as SwitchSearch
 from .methods import register as register
 from .run import OptimizationResult as OptimizationResult
 from .run import genetic as genetic
@@ -61,6 +63,8 @@ from .sensitivity import sensitivities as sensitivities
 from .sensitivity import sensitivity_table as sensitivity_table
 from .settings import OptimizeSettings as OptimizeSettings
 from .settings import SettingsError as SettingsError
+from .switch import SwitchConfig as SwitchConfig
+from .switch import SwitchState as SwitchState
 from .space import (
     PARAMETERS as PARAMETERS,
 )

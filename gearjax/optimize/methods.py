@@ -12,8 +12,10 @@ optimize --method NAME`, `[optimize] method = "NAME"` and the run directory then
         name = "random"
         ...
 
-The built-in methods are `GeneticSearch` (`"ga"`, `gearjax.optimize.ga`) and
-`GradientSearch` (`"gradient"`, multi-start projected Adam, `gearjax.optimize.gradient`).
+The built-in methods are `GeneticSearch` (`"ga"`, `gearjax.optimize.ga`), `GradientSearch`
+(`"gradient"`, multi-start projected Adam, `gearjax.optimize.gradient`) and `SwitchSearch`
+(`"switch"`, a trust-region SQP on the flank branch of the mesh-in regime switch,
+`gearjax.optimize.switch`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from .ga import GAConfig, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, gradient_init, gradient_step, sample_positions, smoothed
 from .objective import Objective
 from .space import DesignSpace
+from .switch import SwitchConfig, switch_init, switch_update, switch_values
 
 #: the registered methods by name (`register`)
 METHODS: dict[str, type[SearchMethod]] = {}
@@ -126,6 +129,7 @@ _ga_ask = eqx.filter_jit(ga_ask)
 _ga_tell = eqx.filter_jit(ga_tell)
 _gradient_step = eqx.filter_jit(lambda state, values, grads, config: gradient_step(state, *smoothed(values, grads), config))
 _sample_positions = eqx.filter_jit(sample_positions)
+_switch_update = eqx.filter_jit(switch_update)
 
 
 def _in_dtype(state, dtype):
@@ -223,3 +227,71 @@ class GradientSearch(SearchMethod):
     def converged(self, state, history) -> bool:
         """Every start stopped by its criterion before the cap."""
         return self.finished(state)
+
+
+@register
+@dataclasses.dataclass(frozen=True)
+class SwitchSearch(SearchMethod):
+    """The switching-aware SQP (`gearjax.optimize.switch`): min $J_\\text{flank}$ subject to
+    every load's switching function $s \\ge$ `config.margin`, from `config.starts` slots that
+    start again once converged; each iteration one call of the flank branch's value and
+    Jacobian (`switch_values`). For the impact force or velocity as the objective."""
+
+    config: SwitchConfig = dataclasses.field(default_factory=SwitchConfig)
+
+    name: ClassVar[str] = "switch"
+    program: ClassVar[str] = "the flank branch's value-and-Jacobian program"
+    uses_gradients: ClassVar[bool] = True
+
+    @classmethod
+    def from_settings(cls, settings) -> SwitchSearch:
+        if settings.objective not in ("force", "velocity"):
+            raise ValueError(f"[optimize] method = \"switch\" minimises the impact (objective \"force\" or "
+                             f"\"velocity\"); got objective = {settings.objective!r}")
+        return cls(settings.switch_config())
+
+    @property
+    def steps(self) -> int:
+        return self.config.iterations
+
+    @property
+    def batch(self) -> int:
+        return self.config.starts
+
+    def init(self, key, starts, dtype):
+        # the constraints' count is the objective's loads x samples: fixed at the first step
+        return switch_init(key, self.config, 0, starts, dtype)
+
+    def step(self, objective, space, state):
+        if objective.quantity not in ("force", "velocity"):
+            raise ValueError(f"the switch method minimises the impact force or velocity; the objective's quantity "
+                             f"is {objective.quantity!r}")
+        constraints = int(objective.torques.shape[0]) * objective.samples
+        if state.c.shape[-1] != constraints:  # the first step: one switching function per load and sample
+            state = eqx.tree_at(lambda s: (s.c, s.a, s.multipliers), state,
+                                (jnp.zeros(state.c.shape[:1] + (constraints,), state.c.dtype),
+                                 jnp.zeros(state.a.shape[:1] + (constraints, 6), state.a.dtype),
+                                 jnp.zeros(state.c.shape[:1] + (constraints,), state.c.dtype)))
+        units = state.trial
+        values = switch_values(objective, space, units)
+        J, _, s, _ = values
+        state = _switch_update(state, values, self.config)
+        on_flank = np.all(np.asarray(s) >= 0.0, axis=-1)  # where J_flank is the objective itself
+        return state, space.to_design(units), np.where(on_flank, np.asarray(J), np.nan)
+
+    def initial_objective(self, objective, space, design) -> float:
+        """$J$ of the scene's own design: $J_\\text{flank}$ where its flanks strike first at
+        every load, else the objective's own batch program (one more compilation)."""
+        unit = jnp.broadcast_to(space.to_unit(jnp.asarray(design, objective.torques.dtype)), (self.batch, 6))
+        J, _, s, _ = switch_values(objective, space, unit)
+        if bool(np.all(np.asarray(s[0]) >= 0.0)):
+            return float(J[0])
+        return float(batch_objective(objective, jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype),
+                                                                 (self.batch, 6)))[0])
+
+    def best(self, state):
+        i = int(np.argmin(np.asarray(state.best_value)))
+        return state.best_value[i], state.best[i]
+
+    def candidates(self, state):
+        return np.asarray(state.best), np.asarray(state.best_value)

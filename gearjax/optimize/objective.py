@@ -51,6 +51,7 @@ from .. import pipeline
 from ..impact import ImpactRegime
 from ..runtime.resources import check_memory
 from ..scene import Scene, check_one_zone
+from .duty import _loads, _speeds, _weights
 from .space import modification_from_design
 
 class Quantity(NamedTuple):
@@ -108,6 +109,9 @@ class Evaluation(eqx.Module):
         lte_peak_to_peak: loaded TE peak-to-peak along the line of action (mm).
         stiffness: cycle mean of the tangent mesh stiffness per face width (N/(mm·µm)).
         failed: number of (load, sample) entries whose LTCA or impact stage failed.
+        switch: the switching function $s$ of the mesh-in regime switch (mm,
+            `gearjax.impact.branches`; > 0 where the flanks strike) of an evaluation on the
+            flank branch (`Objective.evaluate(..., flank_branch=True)`), else None.
     """
 
     objective: Scalar
@@ -119,6 +123,7 @@ class Evaluation(eqx.Module):
     lte_peak_to_peak: Float[Array, "load sample"]
     stiffness: Float[Array, "load sample"]
     failed: Array
+    switch: Float[Array, "load sample"] | None = None
 
 
 class Objective(eqx.Module):
@@ -240,8 +245,11 @@ class Objective(eqx.Module):
             scene = eqx.tree_at(lambda s: s.errors, scene, errors)
         return scene
 
-    def evaluate(self, design: ArrayLike) -> Evaluation:
-        """Results of one design (mm, shape (6,)) at every load and error sample."""
+    def evaluate(self, design: ArrayLike, flank_branch: bool = False) -> Evaluation:
+        """Results of one design (mm, shape (6,)) at every load and error sample; with
+        `flank_branch`, the impact of the flank branch of the regime switch and the switching
+        function (`pipeline.branches`): $J$ of $F_\\text{flank}$, equal to $J$ where every
+        load's flanks strike first (`Evaluation.switch` >= 0)."""
 
         def per_sample(errors):
             scene = self.scene_for(design, errors=errors)
@@ -252,7 +260,12 @@ class Objective(eqx.Module):
             def per_load(torque, speed):
                 checks = modified + pipeline.operating_checks(torque, speed)
                 ltca = pipeline.loaded(scene, pair, tca, torque, checks)
-                impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
+                if flank_branch:
+                    both = pipeline.branches(scene, pair, tca, ltca, torque, speed, checks, edge=False)
+                    impact, switch = both.flank, both.switch
+                else:
+                    impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
+                    switch = jnp.zeros_like(impact.force)
                 ok = (impact.result == RESULTS.successful) & (ltca.result == RESULTS.successful)
                 return (
                     impact.force,
@@ -262,13 +275,15 @@ class Objective(eqx.Module):
                     ltca.lte_peak_to_peak_line,
                     ltca.mean_mesh_stiffness,
                     ok,
+                    switch,
                 )
 
             return _mapped(per_load, self.torques, self.speeds)
 
-        force, velocity, edge, pressure, lte, stiffness, ok = _mapped(per_sample, self.errors, out_axis=1)
+        force, velocity, edge, pressure, lte, stiffness, ok, switch = _mapped(per_sample, self.errors, out_axis=1)
         zero = jnp.zeros((), force.dtype)
-        evaluation = Evaluation(zero, force, force, velocity, edge, pressure, lte, stiffness, jnp.sum(~ok))
+        evaluation = Evaluation(zero, force, force, velocity, edge, pressure, lte, stiffness, jnp.sum(~ok),
+                                switch if flank_branch else None)
         quantity = QUANTITIES[self.quantity].of(evaluation)
         return eqx.tree_at(lambda e: (e.objective, e.quantity), evaluation, (self.value(evaluation), quantity))
 
@@ -316,53 +331,6 @@ def _mapped(fn, *xs, out_axis: int = 0):
         return jax.vmap(fn, out_axes=out_axis)(*xs)
     out = fn(*jax.tree_util.tree_map(lambda x: x[0], xs))
     return jax.tree_util.tree_map(lambda y: jnp.expand_dims(y, out_axis), out)
-
-
-def _loads(scene: Scene, torques, torques_Nm) -> np.ndarray:
-    """The load spectrum (N·mm) from `torques` (N·mm) or `torques_Nm`, default the scene's."""
-    if torques is not None and torques_Nm is not None:
-        raise ValueError("give the loads once: torques (N·mm) or torques_Nm (N·m)")
-    if torques is None and torques_Nm is None:
-        torques, name, unit, factor = [float(scene.operating.torque)], "torques", "N·mm", 1.0
-    elif torques is not None:
-        name, unit, factor = "torques", "N·mm", 1.0
-    else:
-        torques, name, unit, factor = torques_Nm, "torques_Nm", "N·m", 1000.0
-    values = np.asarray(torques, dtype=float)
-    if values.ndim != 1 or values.size == 0:
-        raise ValueError(f"{name} must be a non-empty list of pinion torques ({unit}); got {torques!r}")
-    check_range(name, values, 0.0, 1e12 / factor, low_inclusive=False, unit=unit)
-    return values * factor
-
-
-def _weights(weights, count: int) -> np.ndarray:
-    """The loads' time shares, normalised to sum 1 (default equal)."""
-    if weights is None:
-        return np.full(count, 1.0 / count)
-    w = np.asarray(weights, dtype=float)
-    if w.shape != (count,):
-        raise ValueError(f"load weights must hold one weight per load ({count}); got {list(np.atleast_1d(w))}")
-    check_range("load weights", w, 0.0, None)
-    if not w.sum() > 0.0:
-        raise ValueError(f"load weights must sum to a positive number; got {list(w)}")
-    return w / w.sum()
-
-
-def _speeds(scene: Scene, speeds, speeds_rpm, count: int) -> np.ndarray:
-    """The pinion speed at each load (rad/s) from `speeds` (rad/s) or `speeds_rpm`, one per
-    load or one for all; default the scene's."""
-    if speeds is not None and speeds_rpm is not None:
-        raise ValueError("give the speeds once: speeds (rad/s) or speeds_rpm (rpm)")
-    if speeds is None and speeds_rpm is None:
-        return np.full(count, float(scene.operating.speed))
-    name, unit, value = ("speeds", "rad/s", speeds) if speeds is not None else ("speeds_rpm", "rpm", speeds_rpm)
-    values = np.atleast_1d(np.asarray(value, dtype=float))
-    if values.ndim != 1 or values.size not in (1, count):
-        raise ValueError(f"{name} must hold one pinion speed ({unit}) per load ({count}) or one for all; got {value!r}")
-    factor = 1.0 if speeds is not None else 2.0 * np.pi / 60.0  # rad/s per given unit
-    check_range(name, values, 0.0, 1e6 / factor, unit=unit)
-    values = values * factor
-    return np.broadcast_to(values, (count,)).copy()
 
 
 def sample_errors(

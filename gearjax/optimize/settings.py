@@ -3,7 +3,7 @@
 Every key is optional (defaults in brackets); units are those of the scene file:
 
     [optimize]
-    method = "gradient"           # a registered method: "gradient" | "ga" ["gradient"]
+    method = "gradient"           # a registered method: "gradient" | "ga" | "switch" ["gradient"]
     objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) | "lte" (loaded
                                   #   TE peak-to-peak, um) | "pressure" (MPa) | "stiffness"
                                   #   (mean mesh stiffness, N/(mm um), maximised) ["force"]
@@ -24,11 +24,12 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     certify_top = 5               # candidates certified besides the best found [5]
     population = 40               # GA [40]
     generations = 30              # GA [30]
-    starts = 10                   # gradient [10]
-    iterations = 100              # gradient [100]
+    starts = 10                   # gradient [10], switch: start slots [6]
+    iterations = 100              # gradient [100], switch: SQP iterations [30]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
     smoothing = 0.0               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
     smoothing_pairs = 2           # gradient: antithetic samples per start when smoothing [2]
+    switch_margin_mm = 0.05       # switch: roll length kept off the regime switch [0.05]
     seed = 0                      # [0]
     root_relief_um = [5, 75]      # bounds, one key per parameter (the [modification]
     tip_relief_um = [5, 75]       #   keys), [lower, upper]; seed 001's by default:
@@ -49,6 +50,7 @@ from ..scene import Scene
 from .certification import scene_with_accuracy
 from .ga import GAConfig
 from .gradient import GradientConfig
+from .switch import SwitchConfig
 from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
 from .methods import METHODS
 from .space import _MODULE_BOUNDS, PARAMETERS, SCENE_KEYS, DesignSpace
@@ -57,7 +59,7 @@ _KEYS = {
     "method", "objective", "loads_Nm", "speeds_rpm", "load_weights", "aggregate", "error_samples", "misalignment_um",
     "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
     "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "smoothing",
-    "smoothing_pairs", "seed", "certify", "certify_top",
+    "smoothing_pairs", "switch_margin_mm", "seed", "certify", "certify_top",
 } | {key for key, _ in SCENE_KEYS}
 
 
@@ -107,11 +109,12 @@ class OptimizeSettings:
     certify_top: int = 5
     population: int = 40
     generations: int = 30
-    starts: int = 10
-    iterations: int = 100
+    starts: int | None = None  # None: the method's own default
+    iterations: int | None = None
     learning_rate: float = 0.05
     smoothing: float = 0.0
     smoothing_pairs: int = 2
+    switch_margin_mm: float = 0.05
     seed: int = 0
     bounds: dict = dataclasses.field(default_factory=dict)  # parameter -> (lo, hi) in mm
 
@@ -151,7 +154,7 @@ class OptimizeSettings:
             if key in table:
                 out[key] = int(_number(key, table[key], low, integer=True))
         for key in ("misalignment_um", "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty",
-                    "max_lte_um", "lte_penalty", "learning_rate", "smoothing"):
+                    "max_lte_um", "lte_penalty", "learning_rate", "smoothing", "switch_margin_mm"):
             if key in table:
                 out[key] = float(_number(key, table[key], 0.0))
         bounds = {}
@@ -211,8 +214,12 @@ class OptimizeSettings:
         return GAConfig(population=self.population, elite=max(1, min(2, self.population - 1)))
 
     def gradient_config(self) -> GradientConfig:
-        return GradientConfig(starts=self.starts, iterations=self.iterations, learning_rate=self.learning_rate,
+        starts, iterations = self.starts or 10, self.iterations or 100
+        return GradientConfig(starts=starts, iterations=iterations, learning_rate=self.learning_rate,
                               smoothing=self.smoothing, smoothing_pairs=self.smoothing_pairs)
+
+    def switch_config(self) -> SwitchConfig:
+        return SwitchConfig(starts=self.starts or 6, iterations=self.iterations or 30, margin=self.switch_margin_mm)
 
 
 def scene_keys() -> tuple[SceneKey, ...]:
@@ -249,13 +256,17 @@ def scene_keys() -> tuple[SceneKey, ...]:
         count("certify_top", 1, "candidates certified"),
         count("population", 2, "GA population"),
         count("generations", 1, "GA generations"),
-        count("starts", 1, "gradient: Latin-hypercube starts"),
-        count("iterations", 1, "gradient: Adam iterations per start"),
+        SceneKey("starts", "", None, "gradient, switch: Latin-hypercube starts (start slots)", (1, INF, True, True),
+                 absent="gradient 10, switch 6", integer=True),
+        SceneKey("iterations", "", None, "gradient: Adam iterations per start; switch: SQP iterations",
+                 (1, INF, True, True), absent="gradient 100, switch 30", integer=True),
         SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
                  (0.0, 1.0, False, True)),
         SceneKey("smoothing", "", d["smoothing"], "gradient: σ₀ of the Gaussian smoothing of the objective, in "
                  "the unit cube of the bounds, annealed to 0 (0: none)", (0.0, 0.5, True, True)),
         count("smoothing_pairs", 1, "gradient: antithetic sample pairs per start and iteration when smoothing"),
+        SceneKey("switch_margin_mm", "mm", d["switch_margin_mm"], "switch: roll length kept between the flanks' "
+                 "first contact and the gear tip (s >= margin)", (0.0, 1.0, True, True)),
         count("seed", 0, "random seed of the search and of the error samples"),
     ]
     scales = ("m_n",) * 5 + ("b",)
