@@ -276,15 +276,18 @@ class SwitchSearch(SearchMethod):
         values = switch_values(objective, space, units)
         J, _, s, _ = values
         state = _switch_update(state, values, self.config)
-        on_flank = np.all(np.asarray(s) >= 0.0, axis=-1)  # where J_flank is the objective itself
+        # where J_flank is the objective itself (the flank branch's contact can stop at the
+        # gear tip, s = 0, where the edge strikes first: only s >= margin counts)
+        on_flank = np.all(np.asarray(s) >= self.config.margin - self.config.feasibility, axis=-1)
         return state, space.to_design(units), np.where(on_flank, np.asarray(J), np.nan)
 
     def initial_objective(self, objective, space, design) -> float:
-        """$J$ of the scene's own design: $J_\\text{flank}$ where its flanks strike first at
-        every load, else the objective's own batch program (one more compilation)."""
+        """$J$ of the scene's own design: $J_\\text{flank}$ where it lies on the flank side
+        (s >= margin) at every load, else the objective's own batch program (one more
+        compilation)."""
         unit = jnp.broadcast_to(space.to_unit(jnp.asarray(design, objective.torques.dtype)), (self.batch, 6))
         J, _, s, _ = switch_values(objective, space, unit)
-        if bool(np.all(np.asarray(s[0]) >= 0.0)):
+        if bool(np.all(np.asarray(s[0]) >= self.config.margin - self.config.feasibility)):
             return float(J[0])
         return float(batch_objective(objective, jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype),
                                                                  (self.batch, 6)))[0])
