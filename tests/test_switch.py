@@ -40,35 +40,41 @@ def test_the_subproblem_step_is_the_minimum_of_the_l1_model_in_the_box():
         assert value <= float(jnp.min(model(jnp.concatenate([near, anywhere])))) + 1e-3 * (1.0 + abs(value))
 
 
-def _problem(x):
-    """Objective in N (a quartic bowl around p) and two switching functions (mm)."""
+def _problem(x, extra: int = 0):
+    """Objective in N (a quartic bowl around p) and two switching functions (mm), then
+    `extra` more that hold with room at the solution (as other loads' switches may)."""
     p = jnp.array([0.2, 0.3, 0.5, 0.5, 0.9, 1.3])
     J = 1000.0 * (1.0 + jnp.sum((x - p) ** 2) + 0.5 * jnp.sum((x - p) ** 4))
-    s = jnp.stack([0.1 * (x[0] + x[1] - 1.2), 0.1 * (x[2] ** 2 + x[3] - 0.5)])
+    more = [0.1 * (x[4] + 0.5 * k) for k in range(extra)]  # >= 0.09 mm at the solution
+    s = jnp.stack([0.1 * (x[0] + x[1] - 1.2), 0.1 * (x[2] ** 2 + x[3] - 0.5)] + more)
     return J, s
 
 
-def _values(units):
-    J, s = jax.vmap(_problem)(units)
-    dJ = jax.vmap(jax.grad(lambda x: _problem(x)[0]))(units)
-    ds = jax.vmap(jax.jacfwd(lambda x: _problem(x)[1]))(units)
+def _values(units, extra: int = 0):
+    J, s = jax.vmap(lambda x: _problem(x, extra))(units)
+    dJ = jax.vmap(jax.grad(lambda x: _problem(x, extra)[0]))(units)
+    ds = jax.vmap(jax.jacfwd(lambda x: _problem(x, extra)[1]))(units)
     return J, dJ, s, ds
 
 
-def test_every_slot_reaches_the_kkt_point_of_a_constrained_bowl():
-    """min J subject to s >= margin (both constraints active at the solution, the last
-    coordinate on its bound): every slot's best satisfies the KKT conditions, from starts
-    on either side of the constraints; a slot that has converged starts again."""
+@pytest.mark.parametrize("extra", [0, 3])
+def test_every_slot_reaches_the_kkt_point_of_a_constrained_bowl(extra):
+    """min J subject to s >= margin (two constraints active at the solution, the last
+    coordinate on its bound; with `extra`, five constraints, more than the subproblem
+    holds): every slot's best satisfies the KKT conditions, from starts on either side of
+    the constraints; a slot that has converged starts again."""
     config = go.SwitchConfig(starts=4, iterations=40, margin=0.05)
     starts = np.array([[0.1, 0.1, 0.1, 0.1, 0.1, 0.1], [0.9, 0.9, 0.9, 0.9, 0.9, 0.9]])
-    state = switch_init(jax.random.PRNGKey(0), config, 2, starts)
+    state = switch_init(jax.random.PRNGKey(0), config, 2 + extra, starts)
     assert np.array_equal(np.asarray(state.trial[:2]), starts)
     for _ in range(config.iterations):
-        state = _update(state, _values(state.trial), config)
+        state = _update(state, _values(state.trial, extra), config)
     best = np.asarray(state.best)
     assert np.all(np.isfinite(np.asarray(state.best_value))) and int(np.sum(state.restarts)) >= config.starts
     for x in best:
-        J, dJ, s, ds = (np.asarray(v)[0] for v in _values(jnp.asarray(x)[None]))
+        J, dJ, s, ds = (np.asarray(v)[0] for v in _values(jnp.asarray(x)[None], extra))
+        assert np.all(s[2:] > config.margin)
+        s, ds = s[:2], ds[:2]
         np.testing.assert_allclose(s, config.margin, atol=1e-6)  # both active
         assert x[5] == pytest.approx(1.0, abs=1e-6)  # p_6 = 1.3 lies beyond the bound
         free = slice(0, 5)
