@@ -35,6 +35,8 @@ Methods:
   measured time over a forward call of the same designs); a design enters the run's log
   only where it lies on the flank side at every load, s >= 0.05 mm - 1e-4 mm, as the
   method's own best (there J_flank is the objective).
+* `ga_switch`: the GA (population 20) for half the budget as a global phase, then
+  `switch` from the 6 best distinct members of its population for the rest.
 
 Certification: the running best design of each run at the checkpoints (a fixed grid of
 evaluation counts, CHECKPOINTS, and the run's end) is evaluated again at the
@@ -76,7 +78,7 @@ from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
 OBJECTIVES = {"force_1000": [1000.0], "spectrum": [400.0, 1000.0, 1600.0]}
 METHODS = ("ga", "gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es", "differential_evolution",
-           "switch")
+           "switch", "ga_switch")
 CHECKPOINTS = (25, 50, 75, 100, 150, 200, 300, 400, 600, 800, 1000, 1200, 1600, 2400)
 GRADIENT_METHODS = ("gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient")
 CHUNK = STARTS = 10  # designs per program call; gradient starts
@@ -239,20 +241,33 @@ def run_de(counter: Counter, seed: int) -> None:
 _switch_update = eqx.filter_jit(switch_update)
 
 
-def run_switch(counter: Counter, seed: int, starts: int = 6) -> None:
+def run_switch(counter: Counter, seed: int, starts: int = 6, initial=None) -> None:
     """gearjax's switching-aware SQP (`switch_init`, `switch_values`, `switch_update`, as
-    `gearjax optimize --method switch` runs it) until the budget cannot pay another call."""
+    `gearjax optimize --method switch` runs it) until the budget cannot pay another call;
+    `initial`: the first slots' starts (unit cube)."""
     config = go.SwitchConfig(starts=starts, iterations=10**6)
     constraints = int(counter.objective.torques.shape[0]) * counter.objective.samples
-    state = switch_init(jax.random.PRNGKey(seed), config, constraints, None, jnp.float64)
+    state = switch_init(jax.random.PRNGKey(seed), config, constraints, initial, jnp.float64)
     while counter.left >= starts * counter.switch_cost:
         state = _switch_update(state, counter.switch_values(state.trial), config)
+
+
+def run_ga_switch(counter: Counter, seed: int) -> None:
+    """The GA (population 20) for half the budget as the global phase, then the switching-
+    aware SQP from its 6 best distinct members for the rest."""
+    state = run_ga(counter, seed, population=20, fraction=0.5)
+    fitness, population = np.asarray(state.fitness), np.asarray(state.population)
+    distinct = []
+    for i in [int(i) for i in np.argsort(fitness) if np.isfinite(fitness[i])]:
+        if all(np.max(np.abs(population[i] - population[j])) > 1e-6 for j in distinct):
+            distinct.append(i)
+    run_switch(counter, seed + 1000, initial=population[distinct[:6]] if distinct else None)
 
 
 RUNNERS = {"ga": run_ga, "gradient": run_gradient, "gradient_restarts": run_gradient_restarts,
            "gradient_smoothed": run_gradient_smoothed,
            "ga_gradient": run_ga_gradient, "cma_es": run_cma,
-           "differential_evolution": run_de, "switch": run_switch}
+           "differential_evolution": run_de, "switch": run_switch, "ga_switch": run_ga_switch}
 
 
 def gradient_cost(objective, space, repeats: int = 3) -> dict:
