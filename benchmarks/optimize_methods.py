@@ -276,17 +276,8 @@ def gradient_cost(objective, space, repeats: int = 3) -> dict:
     units = jax.random.uniform(jax.random.PRNGKey(7), (STARTS, 6), jnp.float64)
     designs = space.to_design(units)
 
-    def median(fn):
-        jax.block_until_ready(fn())
-        runs = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            jax.block_until_ready(fn())
-            runs.append(time.perf_counter() - t0)
-        return statistics.median(runs)
-
-    forward = median(lambda: batch_objective(objective, designs))
-    both = median(lambda: batch_value_and_grad(objective, space, units))
+    forward = _median(lambda: batch_objective(objective, designs), repeats)
+    both = _median(lambda: batch_value_and_grad(objective, space, units), repeats)
     return {"forward_s": forward, "value_and_grad_s": both, "ratio": both / forward}
 
 

@@ -179,9 +179,21 @@ class GeneticSearch(SearchMethod):
         return units, values
 
 
+class _MultiStart(SearchMethod):
+    """A method whose state holds each start's best point and value (`best`, `best_value`);
+    the starts' best points are its candidates."""
+
+    def best(self, state):
+        i = int(np.argmin(np.asarray(state.best_value)))
+        return state.best_value[i], state.best[i]
+
+    def candidates(self, state):
+        return np.asarray(state.best), np.asarray(state.best_value)
+
+
 @register
 @dataclasses.dataclass(frozen=True)
-class GradientSearch(SearchMethod):
+class GradientSearch(_MultiStart):
     """Multi-start projected Adam (`gearjax.optimize.gradient`; with `config.smoothing`, on
     the Gaussian-smoothed objective): all starts and their samples in one call per
     iteration; `config.iterations` caps the iterations."""
@@ -214,12 +226,6 @@ class GradientSearch(SearchMethod):
         state = _gradient_step(state, values.reshape(points.shape[:2]), grads.reshape(points.shape), self.config)
         return state, space.to_design(unit), values
 
-    def best(self, state):
-        i = int(np.argmin(np.asarray(state.best_value)))
-        return state.best_value[i], state.best[i]
-
-    def candidates(self, state):
-        return np.asarray(state.best), np.asarray(state.best_value)
 
     def finished(self, state) -> bool:
         return not bool(np.any(np.asarray(state.active)))
@@ -231,7 +237,7 @@ class GradientSearch(SearchMethod):
 
 @register
 @dataclasses.dataclass(frozen=True)
-class SwitchSearch(SearchMethod):
+class SwitchSearch(_MultiStart):
     """The switching-aware SQP (`gearjax.optimize.switch`): min $J_\\text{flank}$ subject to
     every load's switching function $s \\ge$ `config.margin`, from `config.starts` slots that
     start again once converged; each iteration one call of the flank branch's value and
@@ -292,9 +298,3 @@ class SwitchSearch(SearchMethod):
         return float(batch_objective(objective, jnp.broadcast_to(jnp.asarray(design, objective.torques.dtype),
                                                                  (self.batch, 6)))[0])
 
-    def best(self, state):
-        i = int(np.argmin(np.asarray(state.best_value)))
-        return state.best_value[i], state.best[i]
-
-    def candidates(self, state):
-        return np.asarray(state.best), np.asarray(state.best_value)
