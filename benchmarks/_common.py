@@ -97,3 +97,15 @@ def write(name: str, payload: dict) -> Path:
     tmp.write_text(json.dumps(payload, indent=2))
     tmp.replace(path)
     return path
+
+
+def median_time(fn, repeats: int = 3) -> float:
+    """Median wall time (s) of `fn()` (blocked until ready) over `repeats` calls, after one
+    call that compiles."""
+    jax.block_until_ready(fn())
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn())
+        runs.append(time.perf_counter() - t0)
+    return statistics.median(runs)

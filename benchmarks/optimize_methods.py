@@ -57,7 +57,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import time
 
 import jax
@@ -67,7 +66,7 @@ jax.config.update("jax_enable_x64", True)
 import equinox as eqx  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from _common import RESULTS, machine  # noqa: E402
+from _common import RESULTS, machine, median_time  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
@@ -276,8 +275,8 @@ def gradient_cost(objective, space, repeats: int = 3) -> dict:
     units = jax.random.uniform(jax.random.PRNGKey(7), (STARTS, 6), jnp.float64)
     designs = space.to_design(units)
 
-    forward = _median(lambda: batch_objective(objective, designs), repeats)
-    both = _median(lambda: batch_value_and_grad(objective, space, units), repeats)
+    forward = median_time(lambda: batch_objective(objective, designs), repeats)
+    both = median_time(lambda: batch_value_and_grad(objective, space, units), repeats)
     return {"forward_s": forward, "value_and_grad_s": both, "ratio": both / forward}
 
 
@@ -286,19 +285,9 @@ def switch_cost(objective, space, repeats: int = 3) -> dict:
     over a forward call of the same designs (compiled apart, medians)."""
     units = jax.random.uniform(jax.random.PRNGKey(7), (STARTS, 6), jnp.float64)
     designs = space.to_design(units)
-    forward = _median(lambda: batch_objective(objective, designs), repeats)
-    both = _median(lambda: switch_values(objective, space, units), repeats)
+    forward = median_time(lambda: batch_objective(objective, designs), repeats)
+    both = median_time(lambda: switch_values(objective, space, units), repeats)
     return {"forward_s": forward, "switch_values_s": both, "ratio": both / forward}
-
-
-def _median(fn, repeats: int) -> float:
-    jax.block_until_ready(fn())
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        runs.append(time.perf_counter() - t0)
-    return statistics.median(runs)
 
 
 def load_runs() -> dict:

@@ -54,7 +54,7 @@ FILE_COSTS = {
     "test_results.py": 194, "test_point_ltca.py": 161, "test_hard_cases_curvilinear.py": 156, "test_cli.py": 115,
     "test_tca.py": 108, "test_transforms.py": 85, "test_scene.py": 69, "test_hard_cases_ratios.py": 67,
     "test_curvilinear.py": 62, "test_hard_cases_double_arc.py": 41, "test_cache.py": 40, "test_designs.py": 34,
-    "test_scene_fuzz.py": 27, "test_point_analysis.py": 27, "test_hertz_point.py": 22, "test_double_arc.py": 21,
+    "test_scene_fuzz.py": 27, "test_pareto.py": 80, "test_point_analysis.py": 27, "test_hertz_point.py": 22, "test_double_arc.py": 21,
 }
 
 

@@ -29,13 +29,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--resume", action="store_true", help="continue the run in --out")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--quiet", action="store_true", help="plain progress lines instead of a progress bar")
+    parser.add_argument("--pareto", action="store_true",
+                        help="the Pareto front of [optimize] pareto_quantities instead of one objective's minimum")
 
 
 def run(args) -> int:
-    return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet)
+    return run_command(args.scene, args.method, args.out, args.resume, args.json, args.quiet, args.pareto)
 
 
-def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool) -> int:
+def run_command(scene_path: str | None, method: str | None, out: str, resume: bool, as_json: bool, quiet: bool,
+                pareto: bool = False) -> int:
     from ..io.scene_file import DEFAULT_SCENE_TOML, SceneFileError, parse_scene, read_scene_text
 
     try:
@@ -45,10 +48,16 @@ def run_command(scene_path: str | None, method: str | None, out: str, resume: bo
         if method is not None:
             settings = OptimizeSettings.from_dict({**data.get("optimize", {}), "method": method})
         objective, space = settings.build(scene)
+        if pareto:
+            settings.pareto_config()  # its errors before any computation
     except (SceneFileError, SettingsError) as err:
         print(f"gearjax: error: {err}", file=sys.stderr)
         return 2
     progress = "lines" if quiet or not sys.stderr.isatty() else "bar"
+    if pareto:
+        from .pareto import run_pareto
+
+        return run_pareto(objective, space, settings, out, resume, as_json, progress)
     try:
         result = minimize(objective, space, settings.search_method(), seed=settings.seed, run_dir=out,
                           resume=resume, progress=progress, certify=settings.certify, certify_top=settings.certify_top)

@@ -286,3 +286,26 @@ def optimisation_history(results, ax=None, title=None):
     ax.legend()
     ax.grid(True, alpha=0.3, which="both")
     return _title(ax, title)
+
+
+def pareto_front(result, x: int = 0, y: int = 1, colour: int | None = 2, ax=None, cmap="viridis", title=None):
+    """A `ParetoResult`'s front: quantity `x` against quantity `y` (indices into
+    `result.quantities`), a third as the colour; certified values where there are (the
+    search's otherwise), the archive's other designs in grey."""
+    ax = _axes(ax)
+    names = [f"{q} ({u})" for q, u in zip(result.quantities, result.units)]
+    ax.scatter(result.archive_values[:, x], result.archive_values[:, y], s=5, color="0.8",
+               label=f"evaluated on the flank side ('{result.accuracy}')")
+    _, values = result.front
+    which = "certified" if result.certified is not None else "search"
+    accuracy = result.certification_accuracy if result.certified is not None else result.accuracy
+    c = None if colour is None or values.shape[1] <= colour else values[:, colour]
+    points = ax.scatter(values[:, x], values[:, y], c=c, cmap=cmap if c is not None else None, edgecolor="k", zorder=3,
+                        label=f"front, {which} at '{accuracy}'")
+    if c is not None:
+        ax.figure.colorbar(points, ax=ax, label=names[colour])
+    ax.set_xlabel(names[x])
+    ax.set_ylabel(names[y])
+    ax.legend(fontsize="small")
+    ax.grid(True, alpha=0.3)
+    return _title(ax, title)

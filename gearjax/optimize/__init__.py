@@ -6,7 +6,9 @@ function of the design vector over a load spectrum and error samples) → an opt
 GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected Adam; `SwitchSearch`,
 an SQP on the flank branch of the mesh-in regime switch) that writes
 every step to a run directory and resumes exactly → a certification of
-its best designs at a finer accuracy (`certify`), which picks the result.
+its best designs at a finer accuracy (`certify`), which picks the result. `pareto_front`
+trades several quantities (impact force, loaded TE, contact pressure, ...) over the duty
+cycle: many scalarisations solved together by the same SQP, the front certified.
 """
 
 from .certification import Certification as Certification
@@ -55,6 +57,10 @@ from .methods import GradientSearch as GradientSearch
 from .methods import SearchMethod as SearchMethod
 from .methods import SwitchSearch as SwitchSearch
 from .methods import register as register
+from .pareto import ParetoConfig as ParetoConfig
+from .pareto import ParetoState as ParetoState
+from .pareto_run import ParetoResult as ParetoResult
+from .pareto_run import pareto_front as pareto_front
 from .run import OptimizationResult as OptimizationResult
 from .run import genetic as genetic
 from .run import gradient_descent as gradient_descent

@@ -287,13 +287,15 @@ class Objective(eqx.Module):
         quantity = QUANTITIES[self.quantity].of(evaluation)
         return eqx.tree_at(lambda e: (e.objective, e.quantity), evaluation, (self.value(evaluation), quantity))
 
-    def aggregated(self, evaluation: Evaluation, quantity: str | None = None) -> Scalar:
-        """The aggregate over the loads (time-weighted mean or worst case, `aggregate`) of a
-        quantity's sample mean, signed by its sense (`Quantity.sense`): the objective's
-        own quantity by default, or any of `QUANTITIES` from the same evaluation."""
+    def aggregated(self, evaluation: Evaluation, quantity: str | None = None, aggregate: str | None = None) -> Scalar:
+        """The aggregate over the loads (time-weighted mean or worst case: `aggregate`, by
+        default the objective's own) of a quantity's sample mean, signed by its sense
+        (`Quantity.sense`): the objective's own quantity by default, or any of `QUANTITIES`
+        from the same evaluation."""
         q = QUANTITIES[self.quantity if quantity is None else quantity]
         per_load = q.sense * jnp.mean(q.of(evaluation), axis=-1)
-        return jnp.sum(self.weights * per_load, axis=-1) if self.aggregate == "mean" else jnp.max(per_load, axis=-1)
+        mean = (self.aggregate if aggregate is None else aggregate) == "mean"
+        return jnp.sum(self.weights * per_load, axis=-1) if mean else jnp.max(per_load, axis=-1)
 
     def value(self, evaluation: Evaluation) -> Scalar:
         """$J$ from an evaluation's results: the aggregate of the objective's quantity plus the

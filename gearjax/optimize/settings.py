@@ -25,11 +25,14 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     population = 40               # GA [40]
     generations = 30              # GA [30]
     starts = 10                   # gradient [10], switch: start slots [6]
-    iterations = 100              # gradient [100], switch: SQP iterations [30]
+    iterations = 100              # gradient [100], switch: SQP iterations [30], --pareto [40]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
     smoothing = 0.0               # gradient: Gaussian smoothing sigma_0, unit cube, 0-0.5 [0]
     smoothing_pairs = 2           # gradient: antithetic samples per start when smoothing [2]
-    switch_margin_mm = 0.05       # switch: roll length kept off the regime switch [0.05]
+    switch_margin_mm = 0.05       # switch, --pareto: roll length kept off the regime switch [0.05]
+    pareto_quantities = ["force", "lte", "pressure:max"]  # --pareto: traded quantities,
+                                  #   "name" or "name:aggregate" [this list]
+    pareto_divisions = 5          # --pareto: weight lattice divisions (21 scalarisations) [5]
     seed = 0                      # [0]
     root_relief_um = [5, 75]      # bounds, one key per parameter (the [modification]
     tip_relief_um = [5, 75]       #   keys), [lower, upper]; seed 001's by default:
@@ -51,6 +54,7 @@ from .certification import scene_with_accuracy
 from .ga import GAConfig
 from .gradient import GradientConfig
 from .switch import SwitchConfig
+from .pareto import ParetoConfig
 from .objective import AGGREGATES, QUANTITIES, Objective, Penalty, sample_errors
 from .methods import METHODS
 from .space import _MODULE_BOUNDS, PARAMETERS, SCENE_KEYS, DesignSpace
@@ -59,7 +63,7 @@ _KEYS = {
     "method", "objective", "loads_Nm", "speeds_rpm", "load_weights", "aggregate", "error_samples", "misalignment_um",
     "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty", "max_lte_um", "lte_penalty",
     "accuracy", "population", "generations", "starts", "iterations", "learning_rate", "smoothing",
-    "smoothing_pairs", "switch_margin_mm", "seed", "certify", "certify_top",
+    "smoothing_pairs", "switch_margin_mm", "pareto_quantities", "pareto_divisions", "seed", "certify", "certify_top",
 } | {key for key, _ in SCENE_KEYS}
 
 
@@ -115,6 +119,8 @@ class OptimizeSettings:
     smoothing: float = 0.0
     smoothing_pairs: int = 2
     switch_margin_mm: float = 0.05
+    pareto_quantities: tuple[str, ...] = ("force", "lte", "pressure:max")
+    pareto_divisions: int = 5
     seed: int = 0
     bounds: dict = dataclasses.field(default_factory=dict)  # parameter -> (lo, hi) in mm
 
@@ -150,13 +156,23 @@ class OptimizeSettings:
             choice = _choice("certify", table["certify"], ("fast", "default", "reference", "none"))
             out["certify"] = None if choice == "none" else choice
         for key, low in (("error_samples", 0), ("population", 2), ("generations", 1), ("starts", 1),
-                         ("iterations", 1), ("smoothing_pairs", 1), ("seed", 0), ("certify_top", 1)):
+                         ("iterations", 1), ("smoothing_pairs", 1), ("seed", 0), ("certify_top", 1),
+                         ("pareto_divisions", 1)):
             if key in table:
                 out[key] = int(_number(key, table[key], low, integer=True))
         for key in ("misalignment_um", "base_pitch_deviation_um", "max_pressure_MPa", "pressure_penalty",
                     "max_lte_um", "lte_penalty", "learning_rate", "smoothing", "switch_margin_mm"):
             if key in table:
                 out[key] = float(_number(key, table[key], 0.0))
+        if "pareto_quantities" in table:
+            value = table["pareto_quantities"]
+            if not isinstance(value, list) or len(value) < 2:
+                raise _fail("pareto_quantities", f"must be a list of at least two quantities; got {value!r}")
+            try:
+                ParetoConfig(quantities=tuple(value))
+            except ValueError as err:
+                raise _fail("pareto_quantities", str(err)) from None
+            out["pareto_quantities"] = tuple(value)
         bounds = {}
         for (key, factor), name in zip(SCENE_KEYS, PARAMETERS):
             if key in table:
@@ -221,6 +237,14 @@ class OptimizeSettings:
     def switch_config(self) -> SwitchConfig:
         return SwitchConfig(starts=self.starts or 6, iterations=self.iterations or 30, margin=self.switch_margin_mm)
 
+    def pareto_config(self) -> ParetoConfig:
+        """The front search's settings (`gearjax optimize --pareto`)."""
+        try:
+            return ParetoConfig(quantities=self.pareto_quantities, divisions=self.pareto_divisions,
+                                iterations=self.iterations or 40, margin=self.switch_margin_mm)
+        except ValueError as err:
+            raise SettingsError(f"[optimize] {err}") from None
+
 
 def scene_keys() -> tuple[SceneKey, ...]:
     """The `[optimize]` section's keys with unit, default, allowed values and meaning, in
@@ -258,8 +282,8 @@ def scene_keys() -> tuple[SceneKey, ...]:
         count("generations", 1, "GA generations"),
         SceneKey("starts", "", None, "gradient, switch: Latin-hypercube starts (start slots)", (1, INF, True, True),
                  absent="gradient 10, switch 6", integer=True),
-        SceneKey("iterations", "", None, "gradient: Adam iterations per start; switch: SQP iterations",
-                 (1, INF, True, True), absent="gradient 100, switch 30", integer=True),
+        SceneKey("iterations", "", None, "gradient: Adam iterations per start; switch, --pareto: SQP iterations",
+                 (1, INF, True, True), absent="gradient 100, switch 30, --pareto 40", integer=True),
         SceneKey("learning_rate", "", d["learning_rate"], "gradient: Adam's learning rate, in the unit cube of the bounds",
                  (0.0, 1.0, False, True)),
         SceneKey("smoothing", "", d["smoothing"], "gradient: σ₀ of the Gaussian smoothing of the objective, in "
@@ -267,6 +291,12 @@ def scene_keys() -> tuple[SceneKey, ...]:
         count("smoothing_pairs", 1, "gradient: antithetic sample pairs per start and iteration when smoothing"),
         SceneKey("switch_margin_mm", "mm", d["switch_margin_mm"], "switch: roll length kept between the flanks' "
                  "first contact and the gear tip (s >= margin)", (0.0, 1.0, True, True)),
+        SceneKey("pareto_quantities", "", list(d["pareto_quantities"]), "--pareto: the traded quantities, "
+                 "`\"name\"` or `\"name:aggregate\"` (names of `objective`; aggregate `mean` or `max` over the loads, "
+                 "default `aggregate`)", allowed="a list of at least two, each name once"),
+        SceneKey("pareto_divisions", "", d["pareto_divisions"], "--pareto: divisions H of the weight lattice "
+                 "(C(H + Q − 1, Q − 1) scalarisations; 21 for three quantities and H = 5)", (1, 12, True, True),
+                 integer=True),
         count("seed", 0, "random seed of the search and of the error samples"),
     ]
     scales = ("m_n",) * 5 + ("b",)
