@@ -15,7 +15,8 @@ time per design to a forward call's, measured in this run.
 Methods:
 * `pareto_sqp`: `gearjax.optimize.pareto_front` (21 augmented-Chebyshev scalarisations,
   each a slot of the switching-aware SQP on the flank branch with s >= 0.05 mm), as many
-  iterations as the budget buys; its archive holds the designs evaluated on the flank side.
+  iterations as the budget buys; its archive holds every design evaluated, with the force
+  of the regime that strikes first.
 * `sobol_filter`: scrambled Sobol points in the unit cube, the non-dominated ones kept
   (the sampling-and-filter search of the commercial tools).
 * `nsga2`: pymoo's NSGA-II, population 40 (ask and tell); a failed design gets 1e6.
@@ -109,8 +110,8 @@ def run_pareto_sqp(objective, space, seed, budget, cost, certify=None) -> dict:
     points = []
     for line in (RUN_DIRS / f"seed{seed}" / "history.jsonl").read_text().splitlines():
         record = json.loads(line)
-        for i, (q, flank) in enumerate(zip(record["quantities"], record["flank"])):
-            if flank:
+        for i, q in enumerate(record["quantities"]):
+            if np.all(np.isfinite(q)):
                 spent = ((record["step"] - 1) * config.slots + i + 1) * cost
                 points.append([spent, *q])
     return {"points": points, "iterations": config.iterations, "result": result}

@@ -130,10 +130,12 @@ def test_the_flank_branch_is_the_objective_where_the_flanks_strike_first(objecti
     """`Objective.evaluate(..., flank_branch=True)` (what the switch method minimises): where
     its switching function s is > 0 the flanks strike first and J of the flank branch is
     J itself; where the ordinary evaluation strikes with the tip edge, s <= 0 (negative,
-    or zero where the flank branch's contact stops at the gear tip)."""
+    or zero where the flank branch's contact stops at the gear tip). With `actual`, the same
+    program gives the ordinary evaluation's force, velocity and regime besides (what the
+    Pareto front's archive holds)."""
     import jax
 
-    flank = jax.jit(lambda ds: jax.lax.map(lambda d: objective.evaluate(d, flank_branch=True), ds))(
+    flank = jax.jit(lambda ds: jax.lax.map(lambda d: objective.evaluate(d, flank_branch=True, actual=True), ds))(
         jnp.asarray(designs))
     ordinary = _batch_evaluation(objective, designs)  # the batch program of `batch_values`
     switch, edge = np.asarray(flank.switch)[:, 0, 0], np.asarray(ordinary.edge)[:, 0, 0]
@@ -144,7 +146,12 @@ def test_the_flank_branch_is_the_objective_where_the_flanks_strike_first(objecti
     assert not np.any(edge[flanks]) and np.all(switch[ok & edge] <= zero)
     # two programs' first-contact searches, each stopped at its root tolerance
     np.testing.assert_allclose(np.asarray(flank.objective)[flanks], batch_values[flanks], rtol=1e-6)
-    assert ordinary.switch is None and not np.any(np.asarray(flank.edge))
+    assert ordinary.switch is None and ordinary.actual_force is None
+    actual = flank.actual()
+    for name in ("force", "velocity"):  # the same stages in two programs, each stopped at its root tolerance
+        np.testing.assert_allclose(np.asarray(getattr(actual, name))[ok], np.asarray(getattr(ordinary, name))[ok],
+                                   rtol=1e-6)
+    np.testing.assert_array_equal(np.asarray(actual.edge), np.asarray(ordinary.edge))
 
 
 def test_ga_best_never_worsens_and_improves_on_the_first_population(ga_run, space):

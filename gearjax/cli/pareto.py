@@ -46,7 +46,7 @@ def _report(objective, result) -> dict:
         "certification_accuracy": result.certification_accuracy,
         "front": [{"modification": design_dict(d), "objectives": dict(zip(result.quantities, map(float, v))),
                    "certified": result.certified is not None} for d, v in zip(designs, values)],
-        "evaluated_on_flank_side": int(len(result.archive_values)),
+        "evaluated": int(len(result.archive_values)),
         "evaluations": result.evaluations,
         "steps": result.steps,
         "wall_time_s": result.wall_time_s,

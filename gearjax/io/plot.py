@@ -295,7 +295,7 @@ def pareto_front(result, x: int = 0, y: int = 1, colour: int | None = 2, ax=None
     ax = _axes(ax)
     names = [f"{q} ({u})" for q, u in zip(result.quantities, result.units)]
     ax.scatter(result.archive_values[:, x], result.archive_values[:, y], s=5, color="0.8",
-               label=f"evaluated on the flank side ('{result.accuracy}')")
+               label=f"evaluated ('{result.accuracy}')")
     _, values = result.front
     which = "certified" if result.certified is not None else "search"
     accuracy = result.certification_accuracy if result.certified is not None else result.accuracy

@@ -112,6 +112,10 @@ class Evaluation(eqx.Module):
         switch: the switching function $s$ of the mesh-in regime switch (mm,
             `gearjax.impact.branches`; > 0 where the flanks strike) of an evaluation on the
             flank branch (`Objective.evaluate(..., flank_branch=True)`), else None.
+        actual_force, actual_velocity: of an evaluation on the flank branch with `actual`,
+            the impact force (N) and velocity (mm/s) of the regime that strikes first
+            (`gearjax.impact`, as without `flank_branch`; $+\\infty$ where that stage
+            failed), else None.
     """
 
     objective: Scalar
@@ -124,6 +128,15 @@ class Evaluation(eqx.Module):
     stiffness: Float[Array, "load sample"]
     failed: Array
     switch: Float[Array, "load sample"] | None = None
+    actual_force: Float[Array, "load sample"] | None = None
+    actual_velocity: Float[Array, "load sample"] | None = None
+
+    def actual(self) -> Evaluation:
+        """The evaluation with the force and velocity of the regime that strikes first (an
+        evaluation on the flank branch made with `actual`; itself otherwise)."""
+        if self.actual_force is None:
+            return self
+        return dataclasses.replace(self, force=self.actual_force, velocity=self.actual_velocity)
 
 
 class Objective(eqx.Module):
@@ -245,11 +258,12 @@ class Objective(eqx.Module):
             scene = eqx.tree_at(lambda s: s.errors, scene, errors)
         return scene
 
-    def evaluate(self, design: ArrayLike, flank_branch: bool = False) -> Evaluation:
+    def evaluate(self, design: ArrayLike, flank_branch: bool = False, actual: bool = False) -> Evaluation:
         """Results of one design (mm, shape (6,)) at every load and error sample; with
         `flank_branch`, the impact of the flank branch of the regime switch and the switching
         function (`pipeline.branches`): $J$ of $F_\\text{flank}$, equal to $J$ where every
-        load's flanks strike first (`Evaluation.switch` >= 0)."""
+        load's flanks strike first (`Evaluation.switch` >= 0); with `actual` as well, the
+        impact of the regime that strikes first besides (`Evaluation.actual`)."""
 
         def per_sample(errors):
             scene = self.scene_for(design, errors=errors)
@@ -260,30 +274,41 @@ class Objective(eqx.Module):
             def per_load(torque, speed):
                 checks = modified + pipeline.operating_checks(torque, speed)
                 ltca = pipeline.loaded(scene, pair, tca, torque, checks)
+                true = None if flank_branch and not actual else pipeline.impact(scene, pair, tca, ltca, torque,
+                                                                                 speed, checks)
                 if flank_branch:
                     both = pipeline.branches(scene, pair, tca, ltca, torque, speed, checks, edge=False)
                     impact, switch = both.flank, both.switch
                 else:
-                    impact = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
-                    switch = jnp.zeros_like(impact.force)
+                    impact, switch = true, jnp.zeros_like(true.force)
                 ok = (impact.result == RESULTS.successful) & (ltca.result == RESULTS.successful)
+                if not (flank_branch and actual):
+                    true_force = true_velocity = jnp.zeros_like(impact.force)
+                else:
+                    fine = (true.result == RESULTS.successful) & (ltca.result == RESULTS.successful)
+                    true_force, true_velocity = (jnp.where(fine, v, jnp.inf) for v in (true.force, true.velocity))
                 return (
                     impact.force,
                     impact.velocity,
-                    impact.regime == ImpactRegime.edge,
+                    (impact if true is None else true).regime == ImpactRegime.edge,
                     jnp.max(ltca.pressure),
                     ltca.lte_peak_to_peak_line,
                     ltca.mean_mesh_stiffness,
                     ok,
                     switch,
+                    true_force,
+                    true_velocity,
                 )
 
             return _mapped(per_load, self.torques, self.speeds)
 
-        force, velocity, edge, pressure, lte, stiffness, ok, switch = _mapped(per_sample, self.errors, out_axis=1)
+        force, velocity, edge, pressure, lte, stiffness, ok, switch, true_force, true_velocity = _mapped(
+            per_sample, self.errors, out_axis=1)
         zero = jnp.zeros((), force.dtype)
+        both = flank_branch and actual
         evaluation = Evaluation(zero, force, force, velocity, edge, pressure, lte, stiffness, jnp.sum(~ok),
-                                switch if flank_branch else None)
+                                switch if flank_branch else None, true_force if both else None,
+                                true_velocity if both else None)
         quantity = QUANTITIES[self.quantity].of(evaluation)
         return eqx.tree_at(lambda e: (e.objective, e.quantity), evaluation, (self.value(evaluation), quantity))
 

@@ -16,11 +16,9 @@ Where the impact force (or velocity) is a quantity, its flank branch is used and
 load's switching function is held at $s \ge m$ (`gearjax.optimize.switch`): each slot is
 the switching-aware SQP on its own $J_k$, and all slots' trial points are evaluated in one
 compiled call per iteration (`pareto_values`: the quantities, the switching functions and
-their Jacobians by forward mode). Every point evaluated on the flank side enters the
-archive from which `gearjax.optimize.front` filters the front.
-
-A design that strikes with the tip edge first is not on the front: its force is another
-branch's, and tip-edge strikes are what the modifications are for.
+their Jacobians by forward mode, and the quantities with the impact of the regime that
+strikes first). Every point evaluated enters the archive with the latter (a tip-edge strike
+with its own force), from which `gearjax.optimize.front` filters the front.
 """
 
 from __future__ import annotations
@@ -162,10 +160,12 @@ def with_constraints(state: ParetoState, constraints: int) -> ParetoState:
 
 def pareto_values(objective: Objective, space: DesignSpace, units, quantities: tuple[tuple[str, str], ...]):
     """The quantities' aggregates (their units, signed by `Quantity.sense`; $+\\infty$ where a
-    stage failed) and their Jacobian in unit coordinates, the switching functions $s$ (mm,
-    flattened over loads and samples; zeros where no impact quantity is traded) and their
-    Jacobian, at unit-cube points of shape (K, 6): `(q (K, Q), dq (K, Q, 6), s (K, m), ds
-    (K, m, 6))`, one program."""
+    stage failed; the impact's of the flank branch where an impact quantity is traded) and
+    their Jacobian in unit coordinates, the switching functions $s$ (mm, flattened over loads
+    and samples; ones where no impact quantity is traded) and their Jacobian, and the
+    quantities with the impact of the regime that strikes first (`Evaluation.actual`), at
+    unit-cube points of shape (K, 6): `(q (K, Q), dq (K, Q, 6), s (K, m), ds (K, m, 6),
+    actual (K, Q))`, one program."""
     return _values_jit(objective, space, jnp.asarray(units, objective.torques.dtype), quantities)
 
 
@@ -174,17 +174,20 @@ def _values_jit(objective, space, units, quantities):
     flank = any(name in IMPACT_QUANTITIES for name, _ in quantities)
     count = len(quantities)
 
-    def values(x):
-        evaluation = objective.evaluate(space.to_design(x), flank_branch=flank)
+    def aggregates(evaluation):
         q = jnp.stack([objective.aggregated(evaluation, name, aggregate) for name, aggregate in quantities])
-        q = jnp.where(evaluation.failed == 0, q, jnp.inf)
+        return jnp.where(evaluation.failed == 0, q, jnp.inf)
+
+    def values(x):
+        evaluation = objective.evaluate(space.to_design(x), flank_branch=flank, actual=flank)
+        q = aggregates(evaluation)
         switch = evaluation.switch if flank else jnp.ones_like(evaluation.force)
         out = jnp.concatenate([q, switch.reshape(-1)])
-        return out, out
+        return out, (out, aggregates(evaluation.actual()))
 
     def one(x):
-        jacobian, out = jax.jacfwd(values, has_aux=True)(x)
-        return out[:count], jacobian[:count], out[count:], jacobian[count:]
+        jacobian, (out, actual) = jax.jacfwd(values, has_aux=True)(x)
+        return out[:count], jacobian[:count], out[count:], jacobian[count:], actual
 
     return jax.lax.map(one, units, batch_size=objective.map_batch_size)
 
@@ -202,7 +205,7 @@ def scalarised(q, dq, weights, ideal, span, config: ParetoConfig):
 def pareto_update(state: ParetoState, values, config: ParetoConfig) -> ParetoState:
     """One iteration of every slot from `pareto_values` at its trial point; the first sets
     the scaling from the batch's finite values."""
-    q, dq, s, ds = values
+    q, dq, s, ds = values[:4]
     finite = jnp.all(jnp.isfinite(q), axis=-1, keepdims=True)
     low = jnp.min(jnp.where(finite, q, jnp.inf), axis=0)
     high = jnp.max(jnp.where(finite, q, -jnp.inf), axis=0)

@@ -4,11 +4,11 @@ certification of the front.
 The run directory holds `run.json` (what the run is), `history.jsonl` (per iteration the
 designs evaluated (mm), their quantities and whether each lies on the flank side),
 `state.npz` (the `ParetoState` after the last finished iteration) and `front.json` (the
-front's designs with their quantities at the search's and the certification's accuracy).
-The archive is every design evaluated on the flank side; the front is its non-dominated
-set, of which at most `ParetoConfig.front_size` spread-out designs are evaluated again at
-the certification accuracy (the true force there, not a branch's), and the certified
-front is the non-dominated set of those.
+front's designs with their quantities at the certification accuracy). The archive is every
+design evaluated, with the impact of the regime that strikes first (a tip-edge strike with
+its own force); the front is its non-dominated set, of which at most
+`ParetoConfig.front_size` spread-out designs are evaluated again at the certification
+accuracy, and the certified front is the non-dominated set of those.
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ class ParetoResult:
         certified: at the certification accuracy (None without certification).
         on_front: which of them are non-dominated by the certified values (by the search's
             without certification).
-        archive_designs, archive_values: every design evaluated on the flank side and its
-            quantities (the search's accuracy).
+        archive_designs, archive_values: every design evaluated (with finite quantities)
+            and its quantities (the search's accuracy).
         evaluations: evaluations, counted per design, load and error sample (each also
             computed the Jacobian).
         steps: iterations run; wall_time_s: the run's wall time (s), compilation included.
@@ -134,8 +134,7 @@ def pareto_front(
     elapsed = lambda: before + time.perf_counter() - start  # noqa: E731
     state = _iterate(objective, space, config, quantities, state, records, directory, progress, elapsed)
     sense = np.asarray([QUANTITIES[n].sense for n, _ in quantities])
-    designs, values, flank = _archive(records)
-    designs, values = designs[flank], values[flank]
+    designs, values = _archive(records)
     chosen = _front_designs(designs, values * sense, config.front_size)
     certified = None
     if target is not None and target == objective.scene.accuracy:
@@ -163,8 +162,8 @@ def _iterate(objective, space, config, quantities, state, records, directory, pr
             with compiling("the front's value-and-Jacobian program", mode=progress if step == 1 else None):
                 values = pareto_values(objective, space, units, quantities)
             state = _update(state, values, config)
-            q, s = np.asarray(values[0]), np.asarray(values[2])
-            flank = np.all(np.isfinite(q), axis=1) & np.all(s >= 0.0, axis=1)
+            q, s = np.asarray(values[4]), np.asarray(values[2])
+            flank = np.all(s >= 0.0, axis=1)
             record = {"step": step, "designs_mm": np.asarray(space.to_design(units)).tolist(),
                       "quantities": (q * sense).tolist(), "flank": flank.tolist(),
                       "evaluations": step * config.slots * int(objective.torques.shape[0]) * objective.samples,
@@ -172,21 +171,21 @@ def _iterate(objective, space, config, quantities, state, records, directory, pr
             records.append(record)
             if directory is not None:
                 directory.save(state, record)
-            bar.update(step, record["elapsed_s"], front=f"{int(np.sum(flank))} on the flank side")
+            bar.update(step, record["elapsed_s"], flank=f"{int(np.sum(flank))} of {len(flank)} on the flank side")
     finally:
         bar.close()
     return state
 
 
-def _archive(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every design evaluated (mm), its quantities (natural sense) and whether it lies on the
-    flank side, from the run's records."""
+def _archive(records) -> tuple[np.ndarray, np.ndarray]:
+    """Every design evaluated (mm) with finite quantities, and its quantities (natural
+    sense), from the run's records."""
     if not records:
-        return np.zeros((0, 6)), np.zeros((0, 0)), np.zeros(0, bool)
+        return np.zeros((0, 6)), np.zeros((0, 0))
     designs = np.concatenate([np.asarray(r["designs_mm"], float) for r in records])
     values = np.concatenate([np.asarray(r["quantities"], float) for r in records])
-    flank = np.concatenate([np.asarray(r["flank"], bool) for r in records])
-    return designs, values, flank
+    finite = np.all(np.isfinite(values), axis=1)
+    return designs[finite], values[finite]
 
 
 def _front_designs(designs, minimised, count: int) -> np.ndarray:
