@@ -115,7 +115,7 @@ class Evaluation(eqx.Module):
         actual_force, actual_velocity: of an evaluation on the flank branch with `actual`,
             the impact force (N) and velocity (mm/s) of the regime that strikes first
             (`gearjax.impact`, as without `flank_branch`; $+\\infty$ where that stage
-            failed), else None.
+            failed; values only, their derivatives zero), else None.
     """
 
     objective: Scalar
@@ -274,8 +274,11 @@ class Objective(eqx.Module):
             def per_load(torque, speed):
                 checks = modified + pipeline.operating_checks(torque, speed)
                 ltca = pipeline.loaded(scene, pair, tca, torque, checks)
-                true = None if flank_branch and not actual else pipeline.impact(scene, pair, tca, ltca, torque,
-                                                                                 speed, checks)
+                true = None
+                if not flank_branch:
+                    true = pipeline.impact(scene, pair, tca, ltca, torque, speed, checks)
+                elif actual:  # its value only: no tangents through a second search
+                    true = pipeline.impact(*_constant((scene, pair, tca, ltca, torque, speed)), checks)
                 if flank_branch:
                     both = pipeline.branches(scene, pair, tca, ltca, torque, speed, checks, edge=False)
                     impact, switch = both.flank, both.switch
@@ -346,6 +349,11 @@ class Objective(eqx.Module):
         """`lax.map`'s `batch_size` for `batch_size` designs at once: None for one, a plain
         `scan` (`batch_size=1` would `vmap` each design, with the costs `_mapped` avoids)."""
         return None if self.batch_size == 1 else self.batch_size
+
+
+def _constant(tree):
+    """`tree` with `jax.lax.stop_gradient` on its array leaves (forward mode carries no tangents)."""
+    return jax.tree_util.tree_map(lambda v: jax.lax.stop_gradient(v) if eqx.is_array(v) else v, tree)
 
 
 def _mapped(fn, *xs, out_axis: int = 0):
