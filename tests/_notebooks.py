@@ -26,7 +26,7 @@ QUICK = "GEARJAX_NOTEBOOK_QUICK"
 
 #: notebook -> the test file that runs it in its own process (and shares its programs)
 HOSTS = {"02_double_circular_arc.ipynb": "test_point_impact.py", "05_mesh_in_impact.ipynb": "test_impact.py",
-         "06_optimisation.ipynb": "test_optimize.py", "08_pareto.ipynb": "test_pareto.py"}
+         "06_optimisation.ipynb": "test_optimize.py"}
 
 
 def execute_in_process(name: str) -> dict:

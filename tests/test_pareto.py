@@ -129,7 +129,7 @@ def _scene_file(tmp_path, optimize: str) -> str:
     return str(path)
 
 
-#: notebook 08's quick run (the same programs): the three quantities over 400/1 000/1 600 N·m
+#: the three quantities over 400/1 000/1 600 N·m, time shares 1:2:1, at `fast`
 SMALL = ('loads_Nm = [400, 1000, 1600]\nload_weights = [1, 2, 1]\npareto_divisions = 1\niterations = 2\n'
          'certify = "fast"\n')
 
@@ -192,6 +192,21 @@ def test_cli_pareto_writes_a_front_and_a_killed_run_resumes_to_the_same_front(tm
     assert [(r["designs_mm"], r["quantities"], r["flank"]) for r in again] == \
         [(r["designs_mm"], r["quantities"], r["flank"]) for r in history]
     assert resumed["front"] == report["front"]
+
+
+def test_each_quantity_has_its_own_aggregate_over_the_duty_cycle(seed_pair):
+    import gearjax as gj
+    from gearjax.optimize import Evaluation, Objective
+
+    scene = gj.Scene(seed_pair, effects=("impact",), accuracy="fast", operating=gj.OperatingPoint(torque_Nm=1000.0))
+    objective = Objective.create(scene, torques_Nm=[400.0, 1000.0, 1600.0], weights=[1.0, 2.0, 1.0])
+    rng = np.random.default_rng(2)
+    x = [jnp.asarray(rng.uniform(1.0, 2.0, (3, 2))) for _ in range(6)]
+    e = Evaluation(jnp.zeros(()), x[0], x[0], x[1], jnp.zeros((3, 2), bool), x[2], x[3], x[4], jnp.zeros((), int))
+    per_load = np.asarray(x[2]).mean(axis=1)
+    assert float(objective.aggregated(e, "pressure", "max")) == pytest.approx(per_load.max(), rel=1e-14)
+    assert float(objective.aggregated(e, "pressure", "mean")) == pytest.approx(per_load @ [0.25, 0.5, 0.25], rel=1e-14)
+    assert float(objective.aggregated(e, "stiffness", "max")) == pytest.approx(-np.asarray(x[4]).mean(axis=1).min())
 
 
 def test_each_quantity_has_its_own_aggregate_over_the_duty_cycle(seed_pair):
