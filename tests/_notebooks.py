@@ -7,7 +7,7 @@ process (`HOSTS`), where they are already traced and compiled: notebook 06 compu
 gradients of `test_optimize.py`'s objective, a program that is never in the cache
 (`gearjax.runtime.cache`), so a kernel compiled it a second time (about 4 minutes on 2 cores);
 notebook 05 runs `test_impact.py`'s scenes, notebook 02 the double-circular-arc impact program
-of `test_point_impact.py`, notebook 08 the front search of `test_pareto.py`. The cells run in order in one namespace, as
+of `test_point_impact.py`. The cells run in order in one namespace, as
 a kernel runs them, with `GEARJAX_NOTEBOOK_QUICK=1` (the notebook's coarse grid, no
 convergence check); a cell with IPython syntax (magics, shell escapes) is refused, since
 plain Python would not run it as IPython does.

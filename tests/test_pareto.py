@@ -207,29 +207,3 @@ def test_each_quantity_has_its_own_aggregate_over_the_duty_cycle(seed_pair):
     assert float(objective.aggregated(e, "pressure", "max")) == pytest.approx(per_load.max(), rel=1e-14)
     assert float(objective.aggregated(e, "pressure", "mean")) == pytest.approx(per_load @ [0.25, 0.5, 0.25], rel=1e-14)
     assert float(objective.aggregated(e, "stiffness", "max")) == pytest.approx(-np.asarray(x[4]).mean(axis=1).min())
-
-
-def test_each_quantity_has_its_own_aggregate_over_the_duty_cycle(seed_pair):
-    import gearjax as gj
-    from gearjax.optimize import Evaluation, Objective
-
-    scene = gj.Scene(seed_pair, effects=("impact",), accuracy="fast", operating=gj.OperatingPoint(torque_Nm=1000.0))
-    objective = Objective.create(scene, torques_Nm=[400.0, 1000.0, 1600.0], weights=[1.0, 2.0, 1.0])
-    rng = np.random.default_rng(2)
-    x = [jnp.asarray(rng.uniform(1.0, 2.0, (3, 2))) for _ in range(6)]
-    e = Evaluation(jnp.zeros(()), x[0], x[0], x[1], jnp.zeros((3, 2), bool), x[2], x[3], x[4], jnp.zeros((), int))
-    per_load = np.asarray(x[2]).mean(axis=1)
-    assert float(objective.aggregated(e, "pressure", "max")) == pytest.approx(per_load.max(), rel=1e-14)
-    assert float(objective.aggregated(e, "pressure", "mean")) == pytest.approx(per_load @ [0.25, 0.5, 0.25], rel=1e-14)
-    assert float(objective.aggregated(e, "stiffness", "max")) == pytest.approx(-np.asarray(x[4]).mean(axis=1).min())
-
-
-def test_notebook_08_runs_with_the_programs_of_the_command_line_test():
-    """Notebook 08 on its coarse grid, in this file's process: its quick run is the command
-    line test's front search (`SMALL`), so its programs are compiled already."""
-    from _notebooks import execute_in_process
-
-    namespace = execute_in_process("08_pareto.ipynb")
-    result = namespace["result"]
-    assert result.quantities == ("force:mean", "lte:mean", "pressure:max") and result.steps == 2
-    assert result.on_front.any() and np.all(np.isfinite(result.front[1]))
