@@ -114,9 +114,10 @@ class Accuracy(eqx.Module):
         return PRESETS[name]
 
     @classmethod
-    def from_spec(cls, spec: str) -> "Accuracy":
+    def from_spec(cls, spec: str, finer: bool = False) -> "Accuracy":
         """`PRESET` or `PRESET@PxS`: the preset with P positions per pitch and S face
-        slices (e.g. "default@64x41"), as the study tools take it on their command line."""
+        slices (e.g. "default@64x41"), as the study tools take it on their command line;
+        with `finer`, the grid through `Accuracy.finer` (a convergence check's setting)."""
         name, at, grid = spec.partition("@")
         accuracy = cls.preset(name)
         if not at:
@@ -124,6 +125,8 @@ class Accuracy(eqx.Module):
         sizes = re.fullmatch(r"([0-9]+)[xX]([0-9]+)", grid)
         if sizes is None:
             raise ValueError(f"accuracy must be PRESET or PRESET@PxS (e.g. default@64x41); got {spec!r}")
+        if finer:
+            return accuracy.finer(int(sizes[2]), int(sizes[1]))
         return accuracy.replace(positions_per_pitch=int(sizes[1]), face_slices=int(sizes[2]))
 
     def newton_tolerances(self, dtype) -> tuple[float, float]:

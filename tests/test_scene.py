@@ -108,6 +108,8 @@ def test_an_accuracy_spec_names_a_preset_and_its_grid():
     fine = Accuracy.from_spec("default@64x41")
     assert (fine.positions_per_pitch, fine.face_slices) == (64, 41)
     assert fine.replace(positions_per_pitch=32, face_slices=21) == Accuracy.from_spec("default")
+    check = Accuracy.from_spec("reference@128x161", finer=True)
+    assert check == Accuracy.preset("reference").finer(161, 128) and check.contact_max_steps == 320
     for bad in ("default@", "default@64", "default@64x", "default@ax41", "default@\u00b2x41"):
         with pytest.raises(ValueError, match="PRESET@PxS"):
             Accuracy.from_spec(bad)
