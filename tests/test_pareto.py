@@ -120,6 +120,30 @@ def test_every_slot_reaches_the_pareto_set_of_two_bowls():
     assert len(np.unique(np.round(t, 2))) >= 5
 
 
+def test_only_the_slots_that_weigh_the_force_keep_to_the_flank_side():
+    """Both bowls' minima lie at x0 = 0.2, where the switching function s = x0 - 0.5 is
+    negative: the slot of weights (1, 0) on (force, lte) stops at the margin s = 0.05, the
+    slot of weights (0, 1), whose J_k has no force term, reaches the minimum."""
+    a = jnp.full(6, 0.2)
+    config = ParetoConfig(quantities=("force", "lte"), divisions=1, iterations=40)
+
+    def values(x):
+        f = lambda y: jnp.stack([jnp.sum((y - a) ** 2), 2.0 * jnp.sum((y - a) ** 2)])  # noqa: E731
+        return f(x), jax.jacfwd(f)(x), x[:1] - 0.5, jnp.eye(6)[:1]
+
+    @jax.jit
+    def step(state):
+        return pareto_update(state, jax.vmap(values)(state.sqp.trial), config)
+
+    state = with_constraints(pareto_init(jax.random.PRNGKey(5), config), 1)
+    for _ in range(config.iterations):
+        state = step(state)
+    best, weights = np.asarray(state.sqp.best), np.asarray(state.weights)
+    force_slot, lte_slot = int(np.argmax(weights[:, 0])), int(np.argmax(weights[:, 1]))
+    assert best[force_slot, 0] == pytest.approx(0.55, abs=1e-3)
+    np.testing.assert_allclose(best[lte_slot], np.asarray(a), atol=5e-3)  # not held at x0 >= 0.55
+
+
 def _scene_file(tmp_path, optimize: str) -> str:
     from gearjax.io.scene_file import DEFAULT_SCENE_TOML
 

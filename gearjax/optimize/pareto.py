@@ -13,8 +13,9 @@ $$J_k(x) = 1 + \tau \log \sum_i \exp\Big(\frac{\lambda_{ki}\,\hat q_i(x)}{\tau}\
 with weights $\lambda_k$ on the simplex (a Das–Dennis lattice of `divisions`), the ideal
 point $z$ and span $w$ fixed from the first batch ($z = \min - 0.1\,w$, $w$ its range).
 Where the impact force (or velocity) is a quantity, its flank branch is used and every
-load's switching function is held at $s \ge m$ (`gearjax.optimize.switch`): each slot is
-the switching-aware SQP on its own $J_k$, and all slots' trial points are evaluated in one
+load's switching function is held at $s \ge m$ (`gearjax.optimize.switch`) in the slots
+that weigh it (the others, whose $J_k$ does not depend on it, search both sides of the
+switch): each slot is the switching-aware SQP on its own $J_k$, and all slots' trial points are evaluated in one
 compiled call per iteration (`pareto_values`: the quantities, the switching functions and
 their Jacobians by forward mode, and the quantities with the impact of the regime that
 strikes first). Every point evaluated enters the archive with the latter (a tip-edge strike
@@ -195,6 +196,8 @@ def _values_jit(objective, space, units, quantities):
 def scalarised(q, dq, weights, ideal, span, config: ParetoConfig):
     """$J_k$ and its gradient for one slot from its quantities `q` (Q,) and their Jacobian
     `dq` (Q, 6): the smoothed augmented Chebyshev function of the module."""
+    used = weights > 0  # a quantity of weight 0 (also where it failed) does not enter
+    q, dq = jnp.where(used, q, ideal), jnp.where(used[:, None], dq, 0.0)
     scaled = weights * (q - ideal) / span
     tau, rho = config.temperature, config.augmentation
     J = 1.0 + tau * jax.nn.logsumexp(scaled / tau) + rho * jnp.sum(scaled)
@@ -215,5 +218,9 @@ def pareto_update(state: ParetoState, values, config: ParetoConfig) -> ParetoSta
     ideal = jnp.where(first, low - 0.1 * width, state.ideal)
     span = jnp.where(first, width, state.span)
     J, dJ = jax.vmap(scalarised, in_axes=(0, 0, 0, None, None, None))(q, dq, state.weights, ideal, span, config)
+    # a slot whose J_k has no impact quantity does not keep to the flank side
+    impact = jnp.asarray([name in IMPACT_QUANTITIES for name, _ in config.parsed()])
+    free = ~jnp.any((state.weights > 0) & impact, axis=-1)
+    s, ds = jnp.where(free[:, None], jnp.ones_like(s), s), jnp.where(free[:, None, None], 0.0, ds)
     sqp = switch_update(state.sqp, (J, dJ, s, ds), config.sqp)
     return ParetoState(sqp=sqp, weights=state.weights, ideal=ideal, span=span, scaled=state.scaled | ok)
