@@ -27,7 +27,8 @@ non-dominated set of all runs of all methods, and the reference point 1.1 in eac
 is recomputed from the runs file by every call. The front of the `pareto_sqp` run of
 median hypervolume is certified at `--certify` (`pareto_front`'s certification: its
 spread-out non-dominated designs evaluated again, the true force there), and its five
-spread-out certified designs are checked at `--finer`.
+spread-out certified designs are checked at `--finer` (`Accuracy.from_spec(..., finer=True)`:
+with the active-set steps the finer grid needs).
 
 Long runs lose nothing: the `pareto_sqp` runs keep their run directories
 (`benchmarks/results/pareto_runs/`, resumed), every finished run goes at once to
@@ -75,15 +76,15 @@ def objective_for(accuracy: str) -> go.Objective:
     return go.Objective.create(scene, torques_Nm=LOADS_NM, weights=SHARES)
 
 
-def quantities(objective, space, units) -> np.ndarray:
-    """The three quantities (natural sense) of unit-cube points (n, 6), CHUNK per call;
+def quantities(objective, space, units, chunk: int = CHUNK) -> np.ndarray:
+    """The three quantities (natural sense) of unit-cube points (n, 6), `chunk` per call;
     non-finite where a stage failed."""
     parsed = ParetoConfig(quantities=SPECS).parsed()
     units = np.atleast_2d(np.asarray(units, float))
     out = []
-    for first in range(0, len(units), CHUNK):
-        part = units[first:first + CHUNK]
-        padded = np.concatenate([part, np.repeat(part[-1:], CHUNK - len(part), axis=0)])
+    for first in range(0, len(units), chunk):
+        part = units[first:first + chunk]
+        padded = np.concatenate([part, np.repeat(part[-1:], chunk - len(part), axis=0)])
         evaluation = batch_evaluation(objective, space.to_design(jnp.asarray(padded)))
         q = np.stack([np.asarray(QUANTITIES[n].sense * jax.vmap(lambda e, n=n, a=a: objective.aggregated(e, n, a))(
             evaluation)) for n, a in parsed], axis=-1)
@@ -190,12 +191,15 @@ def certify_front(data: dict, objective, space, budget, seed: int, certify: str,
                 "certified": True, "accuracy": result.certification_accuracy} for d, c in zip(designs, certified)]
     if finer is not None:
         checks = data.setdefault("finer", {})
-        if checks.get("seed") != seed or checks.get("accuracy") != finer:
+        setting = gj.Accuracy.from_spec(finer, finer=True)  # with the steps 161 slices need
+        if (checks.get("seed"), checks.get("accuracy"), checks.get("contact_max_steps")) != \
+                (seed, finer, setting.contact_max_steps):
             chosen = spread(certified * np.asarray([QUANTITIES[n.split(":")[0]].sense for n in result.quantities]),
                             5)
-            target = go.certification.with_accuracy(objective, gj.Accuracy.from_spec(finer))
-            q = quantities(target, space, space.to_unit(jnp.asarray(designs[chosen])))
-            checks.update(seed=seed, accuracy=finer, indices=chosen.tolist(), values=q.tolist(),
+            target = go.certification.with_accuracy(objective, setting)
+            q = quantities(target, space, space.to_unit(jnp.asarray(designs[chosen])), chunk=len(chosen))
+            checks.update(seed=seed, accuracy=finer, contact_max_steps=setting.contact_max_steps,
+                          indices=chosen.tolist(), values=q.tolist(),
                           relative_difference=((certified[chosen] - q) / q).tolist())
             save_runs(data)
         for i, q in zip(checks["indices"], checks["values"]):

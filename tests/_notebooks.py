@@ -7,7 +7,7 @@ process (`HOSTS`), where they are already traced and compiled: notebook 06 compu
 gradients of `test_optimize.py`'s objective, a program that is never in the cache
 (`gearjax.runtime.cache`), so a kernel compiled it a second time (about 4 minutes on 2 cores);
 notebook 05 runs `test_impact.py`'s scenes, notebook 02 the double-circular-arc impact program
-of `test_point_impact.py`. The cells run in order in one namespace, as
+of `test_point_impact.py`, notebook 08 the Pareto front program of `test_pareto.py`. The cells run in order in one namespace, as
 a kernel runs them, with `GEARJAX_NOTEBOOK_QUICK=1` (the notebook's coarse grid, no
 convergence check); a cell with IPython syntax (magics, shell escapes) is refused, since
 plain Python would not run it as IPython does.
@@ -26,7 +26,7 @@ QUICK = "GEARJAX_NOTEBOOK_QUICK"
 
 #: notebook -> the test file that runs it in its own process (and shares its programs)
 HOSTS = {"02_double_circular_arc.ipynb": "test_point_impact.py", "05_mesh_in_impact.ipynb": "test_impact.py",
-         "06_optimisation.ipynb": "test_optimize.py"}
+         "06_optimisation.ipynb": "test_optimize.py", "08_pareto.ipynb": "test_pareto.py"}
 
 
 def execute_in_process(name: str) -> dict:

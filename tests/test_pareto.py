@@ -218,6 +218,29 @@ def test_cli_pareto_writes_a_front_and_a_killed_run_resumes_to_the_same_front(tm
     assert resumed["front"] == report["front"]
 
 
+@pytest.mark.slow
+def test_notebook_08_runs_in_this_process_and_its_front_is_the_searchs(tmp_path):
+    """Notebook 08 (the seed pair's front over a three-load duty cycle) runs here rather
+    than in a kernel (`_notebooks.py`), on the CLI test's settings (`SMALL`): the same
+    front program. Its front is `pareto_front`'s at those settings, non-dominated in its
+    archive, and its 'lowest' rows are the front's minima."""
+    from _notebooks import execute_in_process
+
+    from gearjax import optimize as go
+
+    ns = execute_in_process("08_pareto.ipynb")
+    result, config, objective = ns["result"], ns["config"], ns["objective"]
+    assert config.slots == 3 and config.iterations == 2 and result.certification_accuracy == "fast"
+    np.testing.assert_array_equal(np.asarray(objective.torques), [4e5, 1e6, 1.6e6])  # N·mm
+    designs, values = result.front
+    again = go.pareto_front(objective, ns["space"], config, seed=0, certify="fast")
+    np.testing.assert_array_equal(again.front[1], values)
+    archive = result.archive_values
+    for point in values:
+        assert not np.any(np.all(archive <= point, axis=1) & np.any(archive < point, axis=1))
+    assert [int(np.argmin(values[:, j])) for j in range(3)] == ns["lowest"]
+
+
 def test_each_quantity_has_its_own_aggregate_over_the_duty_cycle(seed_pair):
     import gearjax as gj
     from gearjax.optimize import Evaluation, Objective
