@@ -54,7 +54,7 @@ from _common import RESULTS, machine, median_time  # noqa: E402
 
 import gearjax as gj  # noqa: E402
 from gearjax import optimize as go  # noqa: E402
-from gearjax.optimize.batch import batch_evaluation  # noqa: E402
+from gearjax.optimize.batch import batch_evaluation, batch_quantities  # noqa: E402
 from gearjax.optimize.front import hypervolume, nondominated, spread  # noqa: E402
 from gearjax.optimize.objective import QUANTITIES  # noqa: E402
 from gearjax.optimize.pareto import ParetoConfig, pareto_values  # noqa: E402
@@ -79,17 +79,9 @@ def objective_for(accuracy: str) -> go.Objective:
 def quantities(objective, space, units, chunk: int = CHUNK) -> np.ndarray:
     """The three quantities (natural sense) of unit-cube points (n, 6), `chunk` per call;
     non-finite where a stage failed."""
-    parsed = ParetoConfig(quantities=SPECS).parsed()
     units = np.atleast_2d(np.asarray(units, float))
-    out = []
-    for first in range(0, len(units), chunk):
-        part = units[first:first + chunk]
-        padded = np.concatenate([part, np.repeat(part[-1:], chunk - len(part), axis=0)])
-        evaluation = batch_evaluation(objective, space.to_design(jnp.asarray(padded)))
-        q = np.stack([np.asarray(QUANTITIES[n].sense * jax.vmap(lambda e, n=n, a=a: objective.aggregated(e, n, a))(
-            evaluation)) for n, a in parsed], axis=-1)
-        out.append(np.where((np.asarray(evaluation.failed) == 0)[:, None], q, np.inf)[: len(part)])
-    return np.concatenate(out)
+    return batch_quantities(objective, space.to_design(jnp.asarray(units)), ParetoConfig(quantities=SPECS).parsed(),
+                            chunk)
 
 
 def jacobian_cost(objective, space, repeats: int = 3) -> dict:

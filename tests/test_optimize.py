@@ -22,6 +22,7 @@ from gearjax import optimize as go
 from gearjax.optimize.batch import (
     batch_evaluation as _batch_evaluation,
     batch_objective as _batch_objective,
+    batch_quantities,
     batch_value_and_grad as _batch_value_and_grad,
 )
 from gearjax.papers.seed001 import paper_optimum
@@ -373,6 +374,12 @@ def test_every_quantity_is_simulates_and_aggregates_from_one_evaluation(objectiv
         assert float(other.aggregated(evaluation)[0]) == pytest.approx(value, rel=1e-8), name
         assert float(objective.aggregated(evaluation, name)[0]) == pytest.approx(value, rel=1e-8), name
     assert 0.5 < expected["lte"] < 20.0 and 500.0 < expected["pressure"] < 3000.0 and expected["stiffness"] < -5.0
+    # the same program, in chunks of its batch: natural-sense aggregates, +inf on a failed design
+    broken = designs[:3].copy()
+    broken[2, 5] = float(scene.pair.face_width)
+    q = batch_quantities(objective, broken, (("lte", "mean"), ("stiffness", "max")), rows=POPULATION)
+    assert q[0] == pytest.approx([expected["lte"], -expected["stiffness"]], rel=1e-12)
+    assert np.all(np.isfinite(q[:2])) and np.all(q[2] == np.inf) and q.shape == (3, 2)
 
 
 def test_a_duty_cycle_weights_its_loads_by_time_share_or_takes_the_worst_one(scene):

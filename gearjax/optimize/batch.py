@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..runtime.cache import exclude_from_persistent_cache
-from .objective import Objective
+from .objective import QUANTITIES, Objective
 from .space import DesignSpace
 
 
@@ -35,13 +35,30 @@ def batch_objective_in_chunks(objective: Objective, designs, rows: int) -> np.nd
     """$J$ of designs (mm), shape (n, 6), as host values: `batch_objective` on `rows` designs
     per call, the last call padded by repeating its last design, so that every n shares
     the one program of `rows` designs."""
-    designs = np.atleast_2d(np.asarray(designs, dtype=float))
+    out = [np.asarray(batch_objective(objective, padded))[:n] for padded, n in _chunks(designs, rows)]
+    return np.concatenate(out) if out else np.zeros((0,))
+
+
+def batch_quantities(objective: Objective, designs, quantities, rows: int) -> np.ndarray:
+    """Aggregates over the objective's duty cycle of `quantities` (`(name, aggregate)` pairs,
+    `Objective.aggregated`) of designs (mm), shape (n, 6), as host values of shape (n, Q) in
+    their units and natural sense (the stiffness positive), $+\\infty$ where a stage failed;
+    `rows` designs per call of `batch_evaluation`, padded as in `batch_objective_in_chunks`."""
     out = []
+    for padded, n in _chunks(designs, rows):
+        evaluation = batch_evaluation(objective, padded)
+        q = np.stack([QUANTITIES[name].sense * np.asarray(jax.vmap(
+            lambda e, name=name, a=a: objective.aggregated(e, name, a))(evaluation)) for name, a in quantities], axis=-1)
+        out.append(np.where((np.asarray(evaluation.failed) == 0)[:, None], q, np.inf)[:n])
+    return np.concatenate(out) if out else np.zeros((0, len(quantities)))
+
+
+def _chunks(designs, rows: int):
+    """`(padded, n)`: `rows` designs at a time, the last chunk's n padded by its last design."""
+    designs = np.atleast_2d(np.asarray(designs, dtype=float))
     for start in range(0, designs.shape[0], rows):
         part = designs[start:start + rows]
-        padded = np.concatenate([part, np.repeat(part[-1:], rows - part.shape[0], axis=0)])
-        out.append(np.asarray(batch_objective(objective, padded))[: part.shape[0]])
-    return np.concatenate(out) if out else np.zeros((0,))
+        yield np.concatenate([part, np.repeat(part[-1:], rows - part.shape[0], axis=0)]), part.shape[0]
 
 
 def batch_gradients(objective: Objective, designs):

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..io.progress import Progress, compiling
 from ..io.rundir import atomic_write
-from .batch import batch_evaluation
+from .batch import batch_quantities
 from .certification import accuracy_name, certification_accuracy, with_accuracy
 from .front import distinct, nondominated, spread
 from .objective import QUANTITIES, Objective
@@ -80,18 +80,6 @@ class ParetoResult:
         return self.designs[self.on_front], values[self.on_front]
 
 
-@dataclasses.dataclass(frozen=True)
-class _Described:
-    """What `run._description` reads of a method."""
-
-    config: ParetoConfig
-    name: str = "pareto"
-
-    @property
-    def steps(self) -> int:
-        return self.config.iterations
-
-
 def pareto_front(
     objective: Objective,
     space: DesignSpace,
@@ -123,7 +111,7 @@ def pareto_front(
     space.check_fits(objective.scene)
     quantities = config.parsed(objective.aggregate)
     names = tuple(f"{n}:{a}" for n, a in quantities)
-    description = _description(_Described(config), objective, space, seed)
+    description = _description("pareto", config.iterations, config, objective, space, seed)
     description["quantities"] = list(names)
     init = pareto_init(jax.random.PRNGKey(seed), config, _unit(space, _starts(objective, space, None)),
                        objective.torques.dtype)
@@ -206,18 +194,8 @@ def _certified(directory, objective, designs, quantities, accuracy, rows, progre
         stored = json.loads(path.read_text())
         if stored["accuracy"] == name != "custom" and np.array_equal(np.asarray(stored["designs_mm"]), designs):
             return np.asarray(stored["certified"], float)
-    finer = with_accuracy(objective, accuracy)
-    out = []
     with compiling("the certification program", mode=progress):
-        for first in range(0, len(designs), rows):
-            part = designs[first:first + rows]
-            padded = np.concatenate([part, np.repeat(part[-1:], rows - len(part), axis=0)])
-            evaluation = batch_evaluation(finer, padded)
-            ok = np.asarray(evaluation.failed) == 0
-            q = np.stack([np.asarray(QUANTITIES[n].sense * jax.vmap(lambda e, n=n, a=a: finer.aggregated(e, n, a))(
-                evaluation)) for n, a in quantities], axis=-1)
-            out.append(np.where(ok[:, None], q, np.inf)[: len(part)])
-    certified = np.concatenate(out)
+        certified = batch_quantities(with_accuracy(objective, accuracy), designs, quantities, rows)
     if path is not None:
         atomic_write(path, json.dumps({"accuracy": name, "quantities": [f"{n}:{a}" for n, a in quantities],
                                        "designs_mm": designs.tolist(), "certified": certified.tolist()},

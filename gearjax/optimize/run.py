@@ -92,13 +92,15 @@ class OptimizationResult:
 
 
 # ---------------------------------------------------------------------------- drivers
-def _description(method: SearchMethod, objective: Objective, space: DesignSpace, seed) -> dict:
+def _description(name: str, steps: int, config, objective: Objective, space: DesignSpace, seed) -> dict:
+    """What a run directory's `run.json` holds of a search (method `name`, its `steps` and
+    `config`), its objective and space: a resumed run must match it."""
     o = objective
     return {
-        "method": method.name,
+        "method": name,
         "seed": int(seed),
-        "steps": int(method.steps),
-        "config": {f.name: getattr(method.config, f.name) for f in dataclasses.fields(method.config)},
+        "steps": int(steps),
+        "config": {f.name: getattr(config, f.name) for f in dataclasses.fields(config)},
         "lower_mm": np.asarray(space.lower).tolist(),
         "upper_mm": np.asarray(space.upper).tolist(),
         "objective": {
@@ -160,7 +162,8 @@ def minimize(
     init_state = method.init(jax.random.PRNGKey(seed), _unit(space, _starts(objective, space, initial)),
                              objective.torques.dtype)
     start = time.perf_counter()
-    directory, state, records = _resume(run_dir, resume, init_state, _description(method, objective, space, seed))
+    description = _description(method.name, method.steps, method.config, objective, space, seed)
+    directory, state, records = _resume(run_dir, resume, init_state, description)
     previous_time = records[-1]["elapsed_s"] if records else 0.0
     initial_design = np.asarray(objective.scene.modification.as_vector())
     with compiling(f"{method.program} for this objective", mode=progress):  # the run's one big compilation
