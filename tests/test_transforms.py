@@ -69,3 +69,31 @@ def test_second_call_does_not_retrace(seed_pair):
     run(Y).block_until_ready()
     run(Y * 0.5).block_until_ready()
     assert len(traces) == 1
+
+
+def test_nested_vmap_is_the_nested_vmaps_and_traces_one_batching_level():
+    """`nested_vmap` over a (3, 4, 5) grid equals three nested `vmap`s: arguments mapped at
+    some levels (a per-position scalar, a per-pair vector), at all of them (a pytree of
+    per-slice fields) and at none (a constant), with pytree outputs."""
+    from gearjax.tca.grid import nested_vmap
+
+    rng = np.random.default_rng(0)
+    phi, k, z = (jnp.asarray(rng.normal(size=n)) for n in (3, 4, 5))
+    vec = jnp.asarray(rng.normal(size=(4, 2)))
+    fields = {"a": jnp.asarray(rng.normal(size=(3, 4, 5))), "b": jnp.asarray(rng.normal(size=(3, 4, 5, 2)))}
+    constant = jnp.asarray(rng.normal(size=2))
+
+    def f(p, kk, v, zz, fs, c):
+        value = jnp.sin(p) * kk + zz**2 + jnp.dot(v, fs["b"]) + fs["a"] * jnp.sum(c)
+        return value, {"vector": v * p + c}
+
+    axes = [(0, None, None, None, 0, None), (None, 0, 0, None, 0, None), (None, None, None, 0, 0, None)]
+    args = (phi, k, vec, z, fields, constant)
+    nested = f
+    for level in reversed(axes):
+        nested = jax.vmap(nested, level)
+    want, got = nested(*args), nested_vmap(f, axes, *args)
+    assert jax.tree_util.tree_structure(got) == jax.tree_util.tree_structure(want)
+    assert got[0].shape == (3, 4, 5) and got[1]["vector"].shape == (3, 4, 5, 2)
+    for g, w in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want)):
+        np.testing.assert_allclose(np.asarray(g), np.asarray(w), rtol=1e-15, atol=1e-15)

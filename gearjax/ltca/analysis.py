@@ -30,6 +30,7 @@ from .._custom_types import Array, Bool, Float, Int, Scalar
 from .._numerics import safe_divide, safe_sqrt
 from .._solution import RESULTS, first_failure
 from ..tca import ContactKind, TCAResult
+from ..tca.grid import nested_vmap
 from ..units import Material
 from .hertz_point import effective_modulus
 from .model import ContactModel
@@ -200,7 +201,7 @@ def flank_weights(pair, tca: TCAResult, n_mid: int):
 
         return jax.jvp(guess, (zz,), (jnp.ones_like(zz),))[1]
 
-    rate = jax.vmap(jax.vmap(jax.vmap(rates, (None, None, 0)), (None, 0, None)), (0, None, None))(tca.pinion_angle, k, z)
+    rate = nested_vmap(rates, [(0, None, None), (None, 0, None), (None, None, 0)], tca.pinion_angle, k, z)
     u = jnp.stack([tca.pinion_parameter[..., :n_mid], tca.gear_parameter[..., :n_mid]], -1)
     lo = jnp.stack([pair.profile_limits(0)[0], pair.profile_limits(1)[0]])
     hi = jnp.stack([pair.profile_limits(0)[1], pair.profile_limits(1)[1]])

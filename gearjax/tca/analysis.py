@@ -43,7 +43,7 @@ from ..geometry.depth import FlankDepth
 from ._slice import attach_derivatives, select_contact, solve_again, solve_candidates
 from ._slice_problem import FLANK, SliceContact, _contact_residual, contact_kind, make_problem
 from .branch import Branch
-from .grid import face_slices, pair_window, positions
+from .grid import face_slices, nested_vmap, pair_window, positions
 from .peak import explicit_peak_correction, peak_correction
 from .result import TCAResult, _tca_result, merge_zones
 
@@ -134,9 +134,7 @@ def on_grid(f, phi, ks, z, *fields):
     """`f(phi1, k, z, *fields)` over pinion angles `phi` (pos,), pairs `ks` (pair,) and
     slices `z` (slice,); `fields` are per slice, with leading axes (pos, pair, slice)."""
     rest = (0,) * len(fields)
-    f = jax.vmap(f, (None, None, 0, *rest))
-    f = jax.vmap(f, (None, 0, None, *rest))
-    return jax.vmap(f, (0, None, None, *rest))(phi, ks, z, *fields)
+    return nested_vmap(f, [(0, None, None, *rest), (None, 0, None, *rest), (None, None, 0, *rest)], phi, ks, z, *fields)
 
 
 def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None, branch: Branch | None = None
@@ -159,7 +157,7 @@ def solve_grid(pair, depth, accuracy: Accuracy, phi, ks, z, zone_axis=None, bran
     candidates = _retry_failed(fixed_pair, fixed_depth, fixed_phi, ks, fixed_z, on_grid(one, fixed_phi, ks, fixed_z),
                                SafeguardedNewton(rtol=rtol, atol=atol), fallback_steps(steps), zone_axis)
     if branch is None:
-        contact = jax.vmap(jax.vmap(jax.vmap(ft.partial(select_contact, fixed_pair))))(*candidates)
+        contact = nested_vmap(ft.partial(select_contact, fixed_pair), [(0, 0, 0)] * 3, *candidates)
     else:
         contact = on_grid(lambda _, k, __, *c: select_contact(fixed_pair, *c, rule=branch.rule(k)),
                           fixed_phi, ks, fixed_z, *candidates)
@@ -304,7 +302,7 @@ def _peak_rise(pair, depth, phi, ks, z, contact: SliceContact, best, found, n_mi
     def pick(a):
         return jnp.take_along_axis(a[..., :n_mid], best[..., None], -1)[..., 0]
 
-    return jax.vmap(jax.vmap(correction, (None, 0, 0, 0, 0, 0, 0)), (0, None, 0, 0, 0, 0, 0))(
+    return nested_vmap(correction, [(0, None, 0, 0, 0, 0, 0), (None, 0, 0, 0, 0, 0, 0)],
         phi, as_float(ks), best, pick(contact.pinion_parameter), pick(contact.gear_parameter),
         jnp.where(found, pick(contact.offset), 0.0), pick(contact.kind),
     )
@@ -356,10 +354,8 @@ def contact_point(pair, depth, phi1, k, zz, u1, u2, te_slice):
 def _contact_geometry(pair, depth, phi, ks, z, contact: SliceContact, slice_te):
     """`contact_point` of every slice contact, (pos, pair, slice, ...)."""
     points = ft.partial(contact_point, pair, depth)
-    return jax.vmap(
-        jax.vmap(jax.vmap(points, (None, None, 0, 0, 0, 0)), (None, 0, None, 0, 0, 0)),
-        (0, None, None, 0, 0, 0),
-    )(phi, as_float(ks), z, contact.pinion_parameter, contact.gear_parameter, slice_te)
+    return nested_vmap(points, [(0, None, None, 0, 0, 0), (None, 0, None, 0, 0, 0), (None, None, 0, 0, 0, 0)],
+                       phi, as_float(ks), z, contact.pinion_parameter, contact.gear_parameter, slice_te)
 
 
 def _assemble(pair, depth, phi, ks, z, width, contact: SliceContact, n_mid: int, surface: bool,

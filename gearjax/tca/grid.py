@@ -1,8 +1,10 @@
-"""The discretisation of a TCA: pinion positions, face slices and the tooth-pair window."""
+"""The discretisation of a TCA: pinion positions, face slices and the tooth-pair window, and
+`vmap` over their grid."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 
 import jax
 import numpy as np
@@ -72,3 +74,39 @@ def pair_window(pair: AbstractGearPair, pitches: int = 1, margin: int = 1) -> tu
             f"(face width {b:.6g} mm and its lead); at most {MAX_PAIRS - 2 * margin} are analysed: reduce "
             f"face_width or the helix angle")
     return tuple(range(math.ceil(lo) - margin, math.floor(hi) + margin + 1))
+
+
+def nested_vmap(f: Callable, in_axes: Sequence[Sequence[int | None]], *args):
+    """`jax.vmap(...jax.vmap(f, in_axes[-1])..., in_axes[0])(*args)`, traced as one `vmap`.
+
+    The TCA maps its slice solves over positions × tooth pairs × face slices. As nested
+    `vmap`s every operation is batched once per level while tracing (each `jax.numpy`
+    function is a small `jit`, whose program each `vmap` level batches anew); one `vmap`
+    over the flattened grid does the same operations on each element (values equal up to
+    XLA's choice of fusion), traced in less time and to fewer equations
+    (`benchmarks/trace_compile.py`; docs/performance.md).
+
+    `in_axes[level][i]` is 0 where argument `i` is mapped at that level (outermost first)
+    and None where it is not; an argument's leading axes are its mapped levels in order (as
+    for nested `vmap`s with axis 0). Arguments mapped at some levels only are broadcast over
+    the others, so a computation that depends on them alone runs once per grid point instead
+    of once per value; arguments mapped at no level stay unbatched. Arguments may be pytrees
+    (every leaf mapped alike). Outputs have the grid's axes (outermost first) in front."""
+    levels = len(in_axes)
+    mapped = [[level for level in range(levels) if in_axes[level][i] is not None] for i in range(len(args))]
+    sizes = [0] * levels
+    for arg, where in zip(args, mapped):
+        leaf = jax.tree_util.tree_leaves(arg)[0] if where else None
+        for position, level in enumerate(where):
+            sizes[level] = jnp.shape(leaf)[position]
+
+    def flatten(x, where):
+        x = jnp.asarray(x)
+        trailing = x.shape[len(where):]
+        lead = [x.shape[where.index(level)] if level in where else 1 for level in range(levels)]
+        return jnp.broadcast_to(x.reshape(*lead, *trailing), (*sizes, *trailing)).reshape(-1, *trailing)
+
+    flat = [jax.tree_util.tree_map(lambda x, w=where: flatten(x, w), arg) if where else arg
+            for arg, where in zip(args, mapped)]
+    out = jax.vmap(f, [0 if where else None for where in mapped])(*flat)
+    return jax.tree_util.tree_map(lambda x: x.reshape(*sizes, *x.shape[1:]), out)
