@@ -49,12 +49,15 @@ gearjax.enable_compilation_cache(os.environ["GEARJAX_CACHE_DIR"], programs=False
 #: (`GEARJAX_TEST_PROFILE` and `tools/test_profile.py`). Only the schedule uses them: the
 #: order matters, not the values; most of each is tracing and compiling.
 FILE_COSTS = {
-    "test_optimize.py": 734, "test_sweep.py": 434, "test_impact.py": 430, "test_impact_convergence.py": 298,
-    "test_point_impact.py": 284, "test_notebooks.py": 258, "test_hard_cases.py": 247, "test_ltca.py": 229,
-    "test_results.py": 194, "test_point_ltca.py": 161, "test_hard_cases_curvilinear.py": 156, "test_cli.py": 115,
-    "test_tca.py": 108, "test_transforms.py": 85, "test_scene.py": 69, "test_hard_cases_ratios.py": 67,
-    "test_curvilinear.py": 62, "test_hard_cases_double_arc.py": 41, "test_cache.py": 40, "test_designs.py": 34,
-    "test_scene_fuzz.py": 27, "test_pareto.py": 80, "test_point_analysis.py": 27, "test_hertz_point.py": 22, "test_double_arc.py": 21,
+    "test_optimize.py": 324, "test_impact.py": 268, "test_sweep.py": 235, "test_notebooks.py": 168,
+    "test_ltca.py": 164, "test_point_impact.py": 158, "test_pareto.py": 143, "test_results.py": 128,
+    "test_hard_cases.py": 124, "test_impact_convergence.py": 115, "test_tca.py": 112,
+    "test_point_ltca.py": 90, "test_hard_cases_curvilinear.py": 86, "test_transforms.py": 67,
+    "test_cli.py": 57, "test_double_arc.py": 57, "test_hard_cases_ratios.py": 51,
+    "test_curvilinear.py": 49, "test_scene.py": 47, "test_designs.py": 36, "test_cache.py": 33,
+    "test_point_analysis.py": 27, "test_switch.py": 22, "test_hard_cases_double_arc.py": 21,
+    "test_hertz_point.py": 19, "test_scene_fuzz.py": 18, "test_point_contact.py": 17,
+    "test_resources.py": 16,
 }
 
 
