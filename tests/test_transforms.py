@@ -71,7 +71,7 @@ def test_second_call_does_not_retrace(seed_pair):
     assert len(traces) == 1
 
 
-def test_nested_vmap_is_the_nested_vmaps_and_traces_one_batching_level():
+def test_nested_vmap_equals_the_nested_vmaps():
     """`nested_vmap` over a (3, 4, 5) grid equals three nested `vmap`s: arguments mapped at
     some levels (a per-position scalar, a per-pair vector), at all of them (a pytree of
     per-slice fields) and at none (a constant), with pytree outputs."""

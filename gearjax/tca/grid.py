@@ -94,6 +94,8 @@ def nested_vmap(f: Callable, in_axes: Sequence[Sequence[int | None]], *args):
     (every leaf mapped alike). Outputs have the grid's axes (outermost first) in front."""
     levels = len(in_axes)
     mapped = [[level for level in range(levels) if in_axes[level][i] is not None] for i in range(len(args))]
+    if any(all(axis is None for axis in level) for level in in_axes):
+        raise ValueError(f"nested_vmap: every level must map an argument; got in_axes {in_axes}")
     sizes = [0] * levels
     for arg, where in zip(args, mapped):
         leaf = jax.tree_util.tree_leaves(arg)[0] if where else None
