@@ -44,6 +44,7 @@ from .._validate import check_choice, check_range
 from ..geometry._base import SceneFileSpec
 from ..geometry.involute_section import AbstractInvolutePair
 from ..tca import TCAResult
+from ..tca.grid import nested_vmap
 from ..units import Material
 from .iso import iso_mesh_stiffness
 from .tooth_stiffness import (
@@ -151,7 +152,7 @@ class IsoCompliance(AbstractSliceCompliance):
         lengths = width / frac * weights
         diagonal = 1.0 / (line_stiffness * lengths)  # (pos, pair, slice)
         del material
-        blocks = jax.vmap(jax.vmap(jnp.diag))(diagonal)
+        blocks = jnp.where(jnp.eye(diagonal.shape[-1], dtype=bool), diagonal[..., None], 0.0)
         return PointCompliance(blocks, jnp.zeros_like(diagonal), 1.0, diagonal=True)
 
 
@@ -302,11 +303,11 @@ class SliceCompliance(AbstractSliceCompliance):
             transverse = pasternak_compliance(c1k, dz, lam) + pasternak_compliance(c2k, dz, lam)
             return fk[:, None] * transverse * fk[None, :]
 
-        blocks = jax.vmap(jax.vmap(block))(c1, c2, frac)  # (pos, pair, slice, slice)
+        blocks = nested_vmap(block, [(0, 0, 0), (0, 0, 0)], c1, c2, frac)  # (pos, pair, slice, slice)
         lengths = width / frac * weights
         contact = hertz_linear_compliance(material.youngs_modulus, material.poisson_ratio) / lengths
         if self.hertz == "linear":
-            blocks = blocks + jax.vmap(jax.vmap(jnp.diag))(contact)
+            blocks = blocks + jnp.where(jnp.eye(contact.shape[-1], dtype=bool), contact[..., None], 0.0)
             nonlinear = jnp.zeros_like(lengths)
             exponent = 1.0
         else:
