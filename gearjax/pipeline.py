@@ -68,7 +68,8 @@ def unloaded(scene: Scene, pair, checks=()) -> TCAResult:
 
 
 def loaded(scene: Scene, pair, tca: TCAResult, torque, checks=()) -> LTCAResult:
-    """The LTCA stage at pinion torque `torque` (N·mm), guarded by `checks`."""
+    """The LTCA stage at pinion torque `torque` (N·mm; a 1-D array: each, along a leading
+    load axis), guarded by `checks`."""
     with jax.named_scope("stage_ltca"):
         ltca = loaded_contact_analysis(pair, tca, torque, scene.contact_model)
     return guarded(ltca, checks)
@@ -111,20 +112,22 @@ def run(scene: Scene) -> SimulationResult:
 
 
 def over_loads(scene: Scene, torques, speeds=None):
-    """TCA once, the LTCA `vmap`ped over `torques` (N·mm) and, with `speeds` (rad/s), the
-    impact `vmap`ped over the speeds inside the map over torques: `(tca, ltca, impact)`,
+    """TCA once, the LTCA at every torque of `torques` (N·mm) and, with `speeds` (rad/s), the
+    impact `vmap`ped over the speeds inside a map over torques: `(tca, ltca, impact)`,
     `ltca` with leading axis `[torque]`, `impact` `[torque, speed]` (None without speeds).
 
     What does not depend on the load (the TCA, the compliance matrices) or on the speed
-    (the first-contact search and the stiffness fit) is not batched by `vmap`, so it is
-    computed once; the speed axis costs only the impact's closing formulas. The scene's own
-    operating point is ignored."""
+    (the first-contact search and the stiffness fit) is computed once; the LTCA solves the
+    loads in one call (on the CPU in sequence, each warm-started from the load below it:
+    `loaded_contact_analysis` with a 1-D torque), and the speed axis costs only the
+    impact's closing formulas. The scene's own operating point is ignored."""
     pair = scene.pair.resolve()
     checks = modification_checks(scene, pair)
     tca = unloaded(scene, pair, checks)
+    loads = loaded(scene, pair, tca, torques)
 
-    def at_torque(torque):
-        ltca = loaded(scene, pair, tca, torque, checks + operating_checks(torque))
+    def at_torque(torque, ltca):
+        ltca = guarded(ltca, checks + operating_checks(torque))
         if speeds is None:
             return ltca, None
 
@@ -133,7 +136,7 @@ def over_loads(scene: Scene, torques, speeds=None):
 
         return ltca, jax.vmap(at_speed)(speeds)
 
-    ltca, hit = jax.vmap(at_torque)(torques)
+    ltca, hit = jax.vmap(at_torque)(torques, loads)
     return tca, ltca, hit
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from gearjax import Accuracy, FlankDepth, FlankModification, Material, MeshErrors
 from gearjax.papers.seed001 import paper_optimum
-from gearjax.ltca import ContactModel, IsoCompliance, SliceCompliance, iso_mesh_stiffness, loaded_contact_analysis, solver
+from gearjax.ltca import ContactModel, IsoCompliance, SliceCompliance, analysis, iso_mesh_stiffness, loaded_contact_analysis, solver
 from gearjax.ltca.solver import ContactProblem, solve_contact
 from gearjax.tca import pair_window, tooth_contact_analysis
 
@@ -155,6 +155,63 @@ def test_palmgren_newton_does_not_cycle(monkeypatch):
     assert float(np.sum(np.asarray(problem.pinion_arm) * loads)) == pytest.approx(float(problem.torque), rel=1e-10)
     monkeypatch.setattr(solver, "_fraction_to_boundary", lambda loads, new: jnp.ones((), loads.dtype))
     assert not bool(solve_contact(problem, rtol=1e-10, atol=1e-10, max_steps=80).converged)
+
+
+@pytest.mark.parametrize("law", ["palmgren", "linear"])
+def test_warm_started_load_sweep_equals_cold_solves_in_fewer_steps(law):
+    """`solver.solve_over_loads` (the CPU's load sweep: the loads in ascending order, each
+    started from the solution at the load below it) against every load solved on its own
+    from the diagonal model's start, on the recorded 81-slice problem (Palmgren's law, and
+    the same blocks with a linear law) at unsorted torques with a zero and a near-repeat:
+    the same loads and lag, the rates dTheta/dT too, in fewer active-set steps."""
+    data = np.load(Path(__file__).parent / "data" / "palmgren_cycle.npz")
+    fields = [jnp.asarray(data[k]) for k in ("compliance", "nonlinear", "separation", "pinion_arm", "gear_arm")]
+    exponent = float(data["exponent"]) if law == "palmgren" else 1.0
+    torques = float(data["torque"]) * jnp.array([1.0, 0.0, 0.25, 1.5, 0.5, 1.001])
+    accuracy = Accuracy()
+
+    def problem_at(t):
+        return ContactProblem(*fields, t, exponent)
+
+    def positions_at(t):  # one position: the leading axis of `solve_over_loads`' problems
+        return jax.tree_util.tree_map(lambda x: x[None], problem_at(t))
+
+    warm, warm_rates = jax.jit(lambda t: solver.solve_over_loads(positions_at, t, accuracy, True))(torques)
+    warm, warm_rates = jax.tree_util.tree_map(lambda x: x[:, 0], (warm, warm_rates))
+
+    @jax.jit
+    @jax.vmap
+    def cold(t):
+        sol, tangent = jax.jvp(lambda t: solver.solve_with(problem_at(t), accuracy), (t,), (jnp.ones_like(t),))
+        return sol, tangent.rotation
+
+    cold, cold_rates = cold(torques)
+    assert np.all(np.asarray(warm.converged)) and np.all(np.asarray(cold.converged))
+    scale = float(jnp.max(cold.loads))
+    np.testing.assert_allclose(np.asarray(warm.loads), np.asarray(cold.loads), rtol=0, atol=1e-8 * scale)
+    np.testing.assert_allclose(np.asarray(warm.rotation), np.asarray(cold.rotation), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(warm_rates), np.asarray(cold_rates), rtol=1e-7)
+    assert int(jnp.sum(warm.steps)) < int(jnp.sum(cold.steps)), (warm.steps, cold.steps)
+
+
+def test_ltca_over_loads_in_sequence_equals_side_by_side(seed_pair, monkeypatch):
+    """`loaded_contact_analysis` with a 1-D torque: the loads solved in sequence, warm-started
+    (the CPU's choice), and side by side (an accelerator's) give the same result, and each
+    load the scalar call's, with Palmgren's law, to its Newton tolerance (1e-10): loaded
+    TE 1e-9 relative, loads 1e-8 of the largest."""
+    depth, pairs, acc = FlankDepth(pinion=paper_optimum()), pair_window(seed_pair), ACC.replace(face_slices=9)
+    torques = jnp.array([1.0e6, 0.0, 2.5e5])
+    runs = {}
+    for sequential in (True, False):
+        monkeypatch.setattr(analysis, "sequential_loads", lambda diagonal, exponent, s=sequential: s)
+        runs[sequential] = jax.jit(lambda t: _analyse.__wrapped__(seed_pair, depth, t, SLICE, acc, pairs, True))(torques)[1]
+    single = analyse(seed_pair, depth, 1.0e6, SLICE, acc, pairs)[1]
+    for other in (runs[False], jax.tree_util.tree_map(lambda x: x[None], single)):
+        lte = np.asarray(runs[True].transmission_error)[: len(other.transmission_error)]
+        np.testing.assert_allclose(lte, np.asarray(other.transmission_error), rtol=1e-9)
+        loads = np.asarray(runs[True].loads)[: len(other.loads)]
+        np.testing.assert_allclose(loads, np.asarray(other.loads), rtol=0, atol=1e-8 * float(np.max(loads)))
+    assert np.asarray(runs[True].loads).shape == (3, *single.loads.shape)
 
 
 def test_linear_compliance_is_linear_in_the_load(seed_pair):

@@ -17,10 +17,14 @@ problem (`solver.py`) gives the loads and the gear's extra lag $\Theta$. Results
 Point-contact flanks (double-circular-arc gears, `ToothSectionCompliance`) are solved per
 tooth pair instead (`point_analysis`) and reported in the same layout.
 
-Everything is batched over positions (and, through `vmap`, over loads) in one program.
+Everything is batched over positions in one program. Several loads: a 1-D torque; the
+face-coupled problems are then solved load after load, each warm-started from the one
+below it, on the CPU (`solver.solve_over_loads`), and side by side on an accelerator.
 """
 
 from __future__ import annotations
+
+import functools as ft
 
 import equinox as eqx
 import jax
@@ -35,7 +39,7 @@ from ..units import Material
 from .hertz_point import effective_modulus
 from .model import ContactModel
 from .point_analysis import PointContactLoads, ToothSectionCompliance, point_contact_analysis
-from .solver import NO_CONTACT, ContactProblem, solve_with
+from .solver import NO_CONTACT, ContactProblem, sequential_loads, solve_over_loads, solve_with
 
 class LTCAResult(eqx.Module):
     """Loaded contact over a mesh cycle. Axes: position, pair, slice (midpoints only).
@@ -238,7 +242,8 @@ def loaded_contact_analysis(
             `AbstractSliceCompliance`, or point contact with `ToothSectionCompliance`
             (`point_contact_analysis`; the result's `point_contact` holds the contacts).
         tca: its unloaded contact (`tooth_contact_analysis`).
-        torque: pinion torque (N·mm), scalar; `vmap` for several loads.
+        torque: pinion torque (N·mm), a scalar, or a 1-D array of several torques (every
+            field of the result then has a leading load axis, as under `vmap`).
         model: compliance, material, hub radii, accuracy and `extended_contact`
             (`ContactModel`; `Scene.contact_model`). With `extended_contact` loaded teeth
             also touch by their tip edges beyond the active profile (the TCA's edge
@@ -261,8 +266,12 @@ def loaded_contact_analysis(
             f"{', '.join(f.__name__ for f in model.compliance.families)} only; got {type(pair).__name__}"
         )
     pair = pair.resolve()
+    torque = jnp.asarray(torque, dtype=tca.separation.dtype)
+    if torque.ndim > 1:
+        raise ValueError(f"torque must be a scalar or a 1-D array of torques (N·mm); got shape {torque.shape}")
     if isinstance(model.compliance, ToothSectionCompliance):
-        return _point_loaded(pair, tca, torque, model, active_pairs, rates)
+        point = ft.partial(_point_loaded, pair, tca, model=model, active_pairs=active_pairs, rates=rates)
+        return jax.vmap(point)(torque) if torque.ndim else point(torque)
     n_mid = model.accuracy.face_slices
     valid, weights = _loaded_slices(pair, tca, model, active_pairs)
     with jax.named_scope("ltca_compliance"):
@@ -270,27 +279,25 @@ def loaded_contact_analysis(
             pair, model.material, model.hub_radius, tca, n_mid, model.accuracy.quadrature_points, weights
         )
     separation = jnp.where(valid, tca.separation[..., :n_mid], NO_CONTACT)
-    torque = jnp.asarray(torque, dtype=separation.dtype)
     with jax.named_scope("ltca_contact"):
         sol, rotation_rate = _solve_positions(points, separation, _levers(tca, n_mid, pair.center(1)), torque, model, rates)
-    loads = sol.loads.reshape(valid.shape)
-    return LTCAResult(
-        pinion_angle=tca.pinion_angle,
-        torque=torque,
-        transmission_error=tca.transmission_error - sol.rotation,
-        unloaded_transmission_error=tca.transmission_error,
-        rotation=sol.rotation,
-        rotation_rate=rotation_rate,
-        loads=loads,
-        gaps=sol.gaps.reshape(valid.shape),
-        pressure=jnp.where(valid, hertz_pressure(tca, loads, weights, model.material, n_mid), 0.0),
-        converged=sol.converged,
-        pair_index=tca.pair_index,
-        slice_z=tca.slice_z[..., :n_mid],
-        action_radius=pair.action_radii(),
-        face_width=pair.face_width,
-        result=first_failure((~jnp.all(sol.converged), RESULTS.ltca_unconverged)),
-    )
+
+    def result(torque, sol, rotation_rate):
+        loads = sol.loads.reshape(valid.shape)
+        return LTCAResult(
+            pinion_angle=tca.pinion_angle, torque=torque,
+            transmission_error=tca.transmission_error - sol.rotation, unloaded_transmission_error=tca.transmission_error,
+            rotation=sol.rotation, rotation_rate=rotation_rate, loads=loads, gaps=sol.gaps.reshape(valid.shape),
+            pressure=jnp.where(valid, hertz_pressure(tca, loads, weights, model.material, n_mid), 0.0),
+            converged=sol.converged,
+            pair_index=tca.pair_index, slice_z=tca.slice_z[..., :n_mid],
+            action_radius=pair.action_radii(), face_width=pair.face_width,
+            result=first_failure((~jnp.all(sol.converged), RESULTS.ltca_unconverged)),
+        )
+
+    if torque.ndim == 1:  # one result per load (the solutions' leading axis)
+        return jax.vmap(result)(torque, sol, rotation_rate)
+    return result(torque, sol, rotation_rate)
 
 
 def _point_loaded(pair, tca: TCAResult, torque, model: ContactModel, active_pairs, rates: bool) -> LTCAResult:
@@ -354,20 +361,30 @@ def _loaded_slices(pair, tca: TCAResult, model: ContactModel, active_pairs):
 
 def _solve_positions(points, separation, levers, torque, model: ContactModel, rates: bool):
     """The contact problem of every position (vmapped over positions; blocks by tooth
-    pair), and $\\mathrm d\\Theta/\\mathrm dT$ by forward differentiation when `rates`."""
-    p, q = levers
+    pair), and $\\mathrm d\\Theta/\\mathrm dT$ by forward differentiation when `rates`. A
+    1-D `torque` adds a leading load axis: the loads solved in sequence, warm-started
+    (`solve_over_loads`), where that pays (`sequential_loads`), else side by side."""
+    data = (points.blocks, points.nonlinear, separation, *levers)
 
-    def one(blocks, nonlinear, e, pa, qa):
-        def solve(t):
-            problem = ContactProblem(blocks, nonlinear, e, pa, qa, t, points.exponent, points.diagonal)
-            return solve_with(problem, model.accuracy)
+    def every_position(t):
+        def one(*position):
+            def solve(t):
+                return solve_with(ContactProblem(*position, t, points.exponent, points.diagonal), model.accuracy)
 
-        if rates:
-            sol, dsol = jax.jvp(solve, (torque,), (jnp.ones_like(torque),))
-            return sol, dsol.rotation
-        return solve(torque), None
+            if rates:
+                sol, dsol = jax.jvp(solve, (t,), (jnp.ones_like(t),))
+                return sol, dsol.rotation
+            return solve(t), None
 
-    return jax.vmap(one)(points.blocks, points.nonlinear, separation, p, q)
+        return jax.vmap(one)(*data)
+
+    if torque.ndim == 0:
+        return every_position(torque)
+    if not sequential_loads(points.diagonal, points.exponent):
+        return jax.vmap(every_position)(torque)
+    problems = jax.vmap(lambda t, *position: ContactProblem(*position, t, points.exponent, points.diagonal),
+                        in_axes=(None,) + (0,) * len(data))
+    return solve_over_loads(lambda t: problems(t, *data), torque, model.accuracy, rates)
 
 
 def hertz_pressure(tca: TCAResult, loads, weights, material: Material, n_mid: int):

@@ -1,8 +1,9 @@
 """Batched sweeps over operating points, in one compiled call.
 
-The unloaded contact (TCA) does not depend on the load, so a load sweep runs it once and
-maps the loaded stage over the torques with `vmap`; the compliance matrices, which do not
-depend on the load either, are not batched by `vmap` and are built once as well.
+The unloaded contact (TCA) does not depend on the load, so a load sweep runs it once, and
+the LTCA solves all the torques in one call (`loaded_contact_analysis` with a 1-D torque:
+on the CPU one load after another, each warm-started from the load below it); the
+compliance matrices, which do not depend on the load either, are built once as well.
 
 The speed enters the impact only through the velocities (`gearjax.impact`): the
 first-contact search, the contact found and its local stiffness fit do not depend on it.

@@ -105,7 +105,8 @@ def impact_sweep(
 ) -> ImpactSweep:
     """Mesh-in impact of `scene` at every torque and speed of a grid, one compiled call.
 
-    TCA once; LTCA and the first-contact search once per torque (`vmap` over the torques);
+    TCA once; LTCA once per torque (all torques in one call) and the first-contact search
+    once per torque (`vmap` over the torques);
     the speed only scales the kinematics, so the impact's closing formulas are `vmap`ped
     over the speeds without repeating the search or the stiffness fit (see the module
     docstring). The scene's own operating point is ignored; its other settings apply.
