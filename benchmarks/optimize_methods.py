@@ -2,7 +2,7 @@
 
     python benchmarks/optimize_methods.py [--objectives force_1000 spectrum] [--seeds 5]
         [--budget 1200] [--methods ga gradient gradient_restarts gradient_smoothed ga_gradient
-        cma_es differential_evolution]
+        cma_es differential_evolution switch ga_switch cma_es_gradf cma_es_constrained cobyqa slsqp]
         [--accuracy default] [--certify reference] [--plot]
 
 Seed 001's pair at 5 000 rpm with seed 001's design space; two objectives: `force_1000`
@@ -28,6 +28,19 @@ Methods:
   box-bounded; non-finite values are given to it as 1e6 N.
 * `differential_evolution`: SciPy's, population 30 (popsize 5), `vectorized`,
   `updating="deferred"`, no polish; non-finite values as 1e6 N.
+* `cma_es_gradf`: `cma_es` with pycma's gradient injection (`ask(gradf=...)`): each
+  generation one of its 10 candidates is a step along the exact gradient at the mean, which
+  costs one value-and-gradient evaluation (`gradient_cost`) on top of the 10.
+* `cma_es_constrained`: `cma_es` on pycma's augmented-Lagrangian wrapper
+  (`cma.ConstrainedFitnessAL`) of the switching method's problem: min F_flank subject to
+  every load's switching function s >= 0.05 mm, forward values only (one evaluation per
+  design); a design enters the log as `switch`'s do (flank side at every load).
+* `cobyqa`: SciPy's COBYQA (derivative-free, quadratic models) on the raw force, one design
+  per call, from a random start in [0.2, 0.8]^6, started again from a new one whenever it
+  stops, until the budget is spent; non-finite values as 1e6 N.
+* `slsqp`: SciPy's SLSQP on the raw force with its exact gradient (one value-and-gradient
+  evaluation per call), restarted like `cobyqa`; non-finite values as 1e6 N with a zero
+  gradient.
 * `switch`: gearjax's switching-aware SQP (`gearjax.optimize.switch`: min F_flank subject
   to every load's switching function s >= 0.05 mm), 6 start slots that start again once
   converged or stalled; one call of the flank branch's value and Jacobian
@@ -77,9 +90,11 @@ from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
 OBJECTIVES = {"force_1000": [1000.0], "spectrum": [400.0, 1000.0, 1600.0]}
 METHODS = ("ga", "gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es", "differential_evolution",
-           "switch", "ga_switch")
+           "switch", "ga_switch", "cma_es_gradf", "cma_es_constrained", "cobyqa", "slsqp")
+#: the black-box and SciPy methods the figure draws dashed
+YARDSTICKS = ("cma_es", "differential_evolution", "cma_es_gradf", "cma_es_constrained", "cobyqa", "slsqp")
 CHECKPOINTS = (25, 50, 75, 100, 150, 200, 300, 400, 600, 800, 1000, 1200, 1600, 2400)
-GRADIENT_METHODS = ("gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient")
+GRADIENT_METHODS = ("gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es_gradf", "slsqp")
 CHUNK = STARTS = 10  # designs per program call; gradient starts
 PENALTY = 1e6
 RUNS_FILE = RESULTS / "optimize_methods_runs.json"
@@ -134,6 +149,40 @@ class Counter:
         values = np.asarray(values)
         self._note(np.asarray(units), values, self.gradient_cost)
         return values, grads
+
+    def value(self, unit) -> float:
+        """The objective at one unit-cube point, one design per program call (the serial
+        methods), clipped to the cube."""
+        unit = np.clip(np.asarray(unit, float), 0.0, 1.0)[None]
+        value = batch_objective_in_chunks(self.objective, self.space.to_design(jnp.asarray(unit)), 1)
+        self._note(unit, value, 1.0)
+        return float(value[0])
+
+    def value_and_gradient(self, unit) -> tuple[float, np.ndarray]:
+        """The objective and its unit-coordinate gradient at one point (`gradient_cost`),
+        in the STARTS-row program (the point repeated), clipped to the cube."""
+        unit = np.clip(np.asarray(unit, float), 0.0, 1.0)
+        values, grads = batch_value_and_grad(self.objective, self.space, jnp.asarray(np.tile(unit, (STARTS, 1))))
+        self._note(unit[None], np.asarray(values)[:1], self.gradient_cost)
+        return float(values[0]), np.asarray(grads[0])
+
+    def flank_values(self, units):
+        """F_flank and every load's switching function (mm) at unit-cube points, forward
+        only, one evaluation each; noted as `switch_values` notes them."""
+        units = np.clip(np.atleast_2d(np.asarray(units, float)), 0.0, 1.0)
+        evaluation = _flank_jit(self.objective, self.space.to_design(jnp.asarray(units)))
+        J, s = np.asarray(evaluation[0]), np.asarray(evaluation[1]).reshape(len(units), -1)
+        self._note(units, np.where(np.all(s >= ON_FLANK_MM, axis=-1), J, np.inf), 1.0)
+        return J, s
+
+
+@eqx.filter_jit
+def _flank_jit(objective, designs):
+    def one(design):
+        evaluation = objective.evaluate(design, flank_branch=True)
+        return evaluation.objective, evaluation.switch
+
+    return jax.lax.map(one, designs, batch_size=objective.map_batch_size)
 
 
 def run_ga(counter: Counter, seed: int, population: int = 40, fraction: float = 1.0) -> go.GAState:
@@ -213,10 +262,7 @@ def run_ga_gradient(counter: Counter, seed: int) -> None:
 
 
 def run_cma(counter: Counter, seed: int) -> None:
-    import cma
-
-    x0 = np.random.default_rng(seed).uniform(0.2, 0.8, 6)
-    es = cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "popsize": CHUNK, "seed": seed + 1, "verbose": -9})
+    es = _cma(seed)
     while counter.left >= CHUNK:
         x = es.ask()
         values = counter.values(np.asarray(x))
@@ -263,10 +309,95 @@ def run_ga_switch(counter: Counter, seed: int) -> None:
     run_switch(counter, seed + 1000, initial=population[distinct[:6]] if distinct else None)
 
 
+def _cma(seed: int):
+    import cma
+
+    x0 = np.random.default_rng(seed).uniform(0.2, 0.8, 6)
+    return cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "popsize": CHUNK, "seed": seed + 1, "verbose": -9})
+
+
+def run_cma_gradf(counter: Counter, seed: int) -> None:
+    """`run_cma` with pycma's gradient injection: one candidate per generation steps along
+    the exact gradient at the mean (`ask(gradf=...)` calls it once per generation)."""
+    es = _cma(seed)
+    cost = CHUNK + counter.gradient_cost
+
+    def gradient(x):
+        value, grad = counter.value_and_gradient(x)
+        return grad if np.isfinite(value) and np.all(np.isfinite(grad)) else np.zeros(6)
+
+    while counter.left >= cost:
+        x = es.ask(gradf=gradient)
+        values = counter.values(np.asarray(x))
+        es.tell(x, [float(v) if np.isfinite(v) else PENALTY for v in values])
+
+
+def run_cma_constrained(counter: Counter, seed: int) -> None:
+    """CMA-ES on pycma's augmented-Lagrangian wrapper of min F_flank subject to s >= the
+    switching method's margin at every load; each generation's values in one call."""
+    import cma
+
+    es, margin = _cma(seed), go.SwitchConfig().margin
+    cache = {}
+    fitness = cma.ConstrainedFitnessAL(lambda x: cache[tuple(x)][0], lambda x: cache[tuple(x)][1])
+    while counter.left >= CHUNK:
+        x = es.ask()
+        J, s = counter.flank_values(np.asarray(x))
+        for xi, Ji, si in zip(x, J, s):
+            finite = np.isfinite(Ji) and np.all(np.isfinite(si))
+            cache[tuple(xi)] = (float(Ji) if finite else PENALTY, list(margin - si) if finite else [PENALTY] * len(si))
+        es.tell(x, [fitness(xi) for xi in x])
+        fitness.update(es)
+        cache.clear()
+
+
+class BudgetSpent(Exception):
+    """Raised by a serial method's function when the budget cannot pay another call."""
+
+
+def _restarted(counter: Counter, seed: int, minimize_from, cost: float) -> None:
+    """`minimize_from(x0)` from random starts in [0.2, 0.8]^6 until the budget cannot pay
+    another `cost` (the function raises `BudgetSpent` inside a run)."""
+    rng = np.random.default_rng(seed)
+    while counter.left >= cost:
+        try:
+            minimize_from(rng.uniform(0.2, 0.8, 6))
+        except BudgetSpent:
+            return
+
+
+def run_cobyqa(counter: Counter, seed: int) -> None:
+    from scipy.optimize import Bounds, minimize
+
+    def f(x):
+        if counter.left < 1.0:
+            raise BudgetSpent
+        value = counter.value(x)
+        return value if np.isfinite(value) else PENALTY
+
+    _restarted(counter, seed, lambda x0: minimize(f, x0, method="COBYQA", bounds=Bounds(0.0, 1.0),
+                                                  options={"maxfev": max(1, int(counter.left))}), 1.0)
+
+
+def run_slsqp(counter: Counter, seed: int) -> None:
+    from scipy.optimize import minimize
+
+    def f(x):
+        if counter.left < counter.gradient_cost:
+            raise BudgetSpent
+        value, grad = counter.value_and_gradient(x)
+        return (value, grad) if np.isfinite(value) and np.all(np.isfinite(grad)) else (PENALTY, np.zeros(6))
+
+    _restarted(counter, seed, lambda x0: minimize(f, x0, jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * 6,
+                                                  options={"maxiter": 1000}), counter.gradient_cost)
+
+
 RUNNERS = {"ga": run_ga, "gradient": run_gradient, "gradient_restarts": run_gradient_restarts,
            "gradient_smoothed": run_gradient_smoothed,
            "ga_gradient": run_ga_gradient, "cma_es": run_cma,
-           "differential_evolution": run_de, "switch": run_switch, "ga_switch": run_ga_switch}
+           "differential_evolution": run_de, "switch": run_switch, "ga_switch": run_ga_switch,
+           "cma_es_gradf": run_cma_gradf, "cma_es_constrained": run_cma_constrained, "cobyqa": run_cobyqa,
+           "slsqp": run_slsqp}
 
 
 def gradient_cost(objective, space, repeats: int = 3) -> dict:
@@ -418,7 +549,7 @@ def plot(objectives: dict, best: dict, path) -> None:
             for c in grid:
                 values = [min([v for cc, v in e["trajectory"] if cc <= c and v is not None] or [np.inf]) for e in entries]
                 medians.append(np.median(values))
-            yardstick = method in ("cma_es", "differential_evolution")
+            yardstick = method in YARDSTICKS
             ax.step(grid, medians, where="post", ls="--" if yardstick else "-",
                     label=f"{method}{' (yardstick)' if yardstick else ''}, {len(entries)} seeds")
         ax.axhline(1.01 * best[name], color="k", lw=0.6, ls=":", label="best certified + 1 %")
