@@ -313,7 +313,8 @@ def _cma(seed: int):
     import cma
 
     x0 = np.random.default_rng(seed).uniform(0.2, 0.8, 6)
-    return cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "popsize": CHUNK, "seed": seed + 1, "verbose": -9})
+    return cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "popsize": CHUNK, "seed": seed + 1, "verbose": -9,
+                                                "verb_log": 0})
 
 
 def run_cma_gradf(counter: Counter, seed: int) -> None:
@@ -336,7 +337,10 @@ def run_cma_constrained(counter: Counter, seed: int) -> None:
     """CMA-ES on pycma's augmented-Lagrangian wrapper of min F_flank subject to s >= the
     switching method's margin at every load; each generation's values in one call."""
     import cma
+    import cma.constraints_handler
+    import cma.logger
 
+    cma.constraints_handler._Logger = cma.logger.LoggerDummy  # its loggers write files to outcmaes/
     es, margin = _cma(seed), go.SwitchConfig().margin
     cache = {}
     fitness = cma.ConstrainedFitnessAL(lambda x: cache[tuple(x)][0], lambda x: cache[tuple(x)][1])
