@@ -2,7 +2,8 @@
 
     python benchmarks/optimize_methods.py [--objectives force_1000 spectrum] [--seeds 5]
         [--budget 1200] [--methods ga gradient gradient_restarts gradient_smoothed ga_gradient
-        cma_es differential_evolution switch ga_switch cma_es_gradf cma_es_constrained cobyqa slsqp]
+        cma_es differential_evolution switch ga_switch cma_es_gradf cma_es_constrained cobyqa slsqp
+        gearjax_cma_es]
         [--accuracy default] [--certify reference] [--plot]
 
 Seed 001's pair at 5 000 rpm with seed 001's design space; two objectives: `force_1000`
@@ -26,6 +27,9 @@ Methods:
   members of its population polished by projected Adam (learning rate 0.02).
 * `cma_es`: CMA-ES, the reference implementation (`cma`), population 10, sigma0 0.3,
   box-bounded; non-finite values are given to it as 1e6 N.
+* `gearjax_cma_es`: gearjax's CMA-ES (`cma_init`/`cma_ask`/`cma_tell`, `gearjax optimize
+  --method cma_es`), population 10, sigma0 0.3, pycma's boundary transformation, restarted
+  once the distribution collapses; non-finite values count as +inf.
 * `differential_evolution`: SciPy's, population 30 (popsize 5), `vectorized`,
   `updating="deferred"`, no polish; non-finite values as 1e6 N.
 * `cma_es_gradf`: `cma_es` with pycma's gradient injection (`ask(gradf=...)`): each
@@ -90,7 +94,7 @@ from gearjax.papers.seed001 import paper_optimum, seed_pair  # noqa: E402
 
 OBJECTIVES = {"force_1000": [1000.0], "spectrum": [400.0, 1000.0, 1600.0]}
 METHODS = ("ga", "gradient", "gradient_restarts", "gradient_smoothed", "ga_gradient", "cma_es", "differential_evolution",
-           "switch", "ga_switch", "cma_es_gradf", "cma_es_constrained", "cobyqa", "slsqp")
+           "switch", "ga_switch", "cma_es_gradf", "cma_es_constrained", "cobyqa", "slsqp", "gearjax_cma_es")
 #: the black-box and SciPy methods the figure draws dashed
 YARDSTICKS = ("cma_es", "differential_evolution", "cma_es_gradf", "cma_es_constrained", "cobyqa", "slsqp")
 CHECKPOINTS = (25, 50, 75, 100, 150, 200, 300, 400, 600, 800, 1000, 1200, 1600, 2400)
@@ -269,6 +273,16 @@ def run_cma(counter: Counter, seed: int) -> None:
         es.tell(x, [float(v) if np.isfinite(v) else PENALTY for v in values])
 
 
+def run_gearjax_cma(counter: Counter, seed: int) -> None:
+    config = go.CMAConfig(population=CHUNK)
+    ask = eqx.filter_jit(lambda s: go.cma_ask(s, config))
+    tell = eqx.filter_jit(lambda s, c, f: go.cma_tell(s, c, f, config))
+    state = go.cma_init(jax.random.PRNGKey(seed), config, 6)
+    while counter.left >= CHUNK:
+        candidates, state = ask(state)
+        state = tell(state, candidates, jnp.asarray(counter.values(candidates)))
+
+
 def run_de(counter: Counter, seed: int) -> None:
     from scipy.optimize import differential_evolution
 
@@ -401,7 +415,7 @@ RUNNERS = {"ga": run_ga, "gradient": run_gradient, "gradient_restarts": run_grad
            "ga_gradient": run_ga_gradient, "cma_es": run_cma,
            "differential_evolution": run_de, "switch": run_switch, "ga_switch": run_ga_switch,
            "cma_es_gradf": run_cma_gradf, "cma_es_constrained": run_cma_constrained, "cobyqa": run_cobyqa,
-           "slsqp": run_slsqp}
+           "slsqp": run_slsqp, "gearjax_cma_es": run_gearjax_cma}
 
 
 def gradient_cost(objective, space, repeats: int = 3) -> dict:

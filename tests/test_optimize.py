@@ -702,6 +702,27 @@ def test_a_registered_method_runs_through_minimize_the_settings_and_the_run_dire
         go.OptimizeSettings.from_dict({"method": "random_test"})
 
 
+def test_cma_es_runs_through_the_settings_and_minimize_with_the_batch_program_of_the_file(objective, space,
+                                                                                        batch_values, tmp_path):
+    """`[optimize] method = "cma_es"` sets up `CMASearch` (population and generations from
+    the section, its own defaults otherwise); a run of 12 candidates per generation shares
+    the file's compiled batch program, asks only designs within the bounds, and its best is
+    the best value it evaluated."""
+    assert go.OptimizeSettings.from_dict({"method": "cma_es"}).search_method() == go.CMASearch(go.CMAConfig(10), 120)
+    with pytest.raises(go.SettingsError, match=r"\[optimize\] population"):
+        go.OptimizeSettings.from_dict({"method": "cma_es", "population": 3}).search_method()
+    settings = go.OptimizeSettings.from_dict({"method": "cma_es", "population": POPULATION, "generations": 3})
+    method = settings.search_method()
+    result = go.minimize(objective, space, method, seed=2, certify=None, run_dir=tmp_path / "run")
+    assert result.method == "cma_es" and result.steps == 3 and result.evaluations == 3 * POPULATION
+    records = [json.loads(line) for line in (tmp_path / "run" / "history.jsonl").read_text().splitlines()]
+    evaluated = np.array([r["designs_mm"] for r in records])
+    assert evaluated.shape == (3, POPULATION, 6) and space.contains(evaluated)
+    assert result.best_objective == min(min(r["objective"]) for r in records)
+    assert np.all(np.diff(result.history) <= 0.0)
+    assert result.initial_objective == pytest.approx(batch_values[0], rel=1e-12)
+
+
 def test_resuming_a_run_of_another_version_names_the_setting_it_lacks(tmp_path):
     from gearjax.io.rundir import RunDirectory, RunDirectoryError
 

@@ -3,7 +3,7 @@
 The pipeline: a `DesignSpace` (bounds, unit-cube coordinates) → an `Objective` (a pure
 function of the design vector over a load spectrum and error samples) → an optimiser
 (`minimize` with a registered `SearchMethod` of `gearjax.optimize.methods`: `genetic`, the
-GA of `gearjax.optimize.ga`; `gradient_descent`, multi-start projected Adam; `SwitchSearch`,
+GA of `gearjax.optimize.ga`; `CMASearch`, CMA-ES of `gearjax.optimize.cma`; `gradient_descent`, multi-start projected Adam; `SwitchSearch`,
 an SQP on the flank branch of the mesh-in regime switch) that writes
 every step to a run directory and resumes exactly → a certification of
 its best designs at a finer accuracy (`certify`), which picks the result. `pareto_front`
@@ -13,6 +13,11 @@ cycle: many scalarisations solved together by the same SQP, the front certified.
 
 from .certification import Certification as Certification
 from .certification import certify as certify
+from .cma import CMAConfig as CMAConfig
+from .cma import CMAState as CMAState
+from .cma import cma_ask as cma_ask
+from .cma import cma_init as cma_init
+from .cma import cma_tell as cma_tell
 from .ga import GAConfig as GAConfig
 from .ga import GAState as GAState
 from .ga import ga_ask as ga_ask
@@ -52,6 +57,7 @@ from .objective import (
     sample_errors as sample_errors,
 )
 from .methods import METHODS as METHODS
+from .methods import CMASearch as CMASearch
 from .methods import GeneticSearch as GeneticSearch
 from .methods import GradientSearch as GradientSearch
 from .methods import SearchMethod as SearchMethod

@@ -12,7 +12,8 @@ optimize --method NAME`, `[optimize] method = "NAME"` and the run directory then
         name = "random"
         ...
 
-The built-in methods are `GeneticSearch` (`"ga"`, `gearjax.optimize.ga`), `GradientSearch`
+The built-in methods are `GeneticSearch` (`"ga"`, `gearjax.optimize.ga`), `CMASearch`
+(`"cma_es"`, `gearjax.optimize.cma`), `GradientSearch`
 (`"gradient"`, multi-start projected Adam, `gearjax.optimize.gradient`) and `SwitchSearch`
 (`"switch"`, a trust-region SQP on the flank branch of the mesh-in regime switch,
 `gearjax.optimize.switch`).
@@ -30,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .batch import batch_objective, batch_value_and_grad
+from .cma import CMAConfig, cma_ask, cma_init, cma_tell
 from .ga import GAConfig, ga_ask, ga_init, ga_tell
 from .gradient import GradientConfig, gradient_init, gradient_step, sample_positions, smoothed
 from .objective import Objective
@@ -127,6 +129,8 @@ class SearchMethod(abc.ABC):
 # The optimisers' own steps are small programs of their own (`batch` holds the objective's).
 _ga_ask = eqx.filter_jit(ga_ask)
 _ga_tell = eqx.filter_jit(ga_tell)
+_cma_ask = eqx.filter_jit(cma_ask)
+_cma_tell = eqx.filter_jit(cma_tell)
 _gradient_step = eqx.filter_jit(lambda state, values, grads, config: gradient_step(state, *smoothed(values, grads), config))
 _sample_positions = eqx.filter_jit(sample_positions)
 _switch_update = eqx.filter_jit(switch_update)
@@ -151,7 +155,7 @@ class GeneticSearch(SearchMethod):
 
     @classmethod
     def from_settings(cls, settings) -> GeneticSearch:
-        return cls(settings.ga_config(), settings.generations)
+        return cls(settings.ga_config(), settings.generations or 30)
 
     @property
     def steps(self) -> int:
@@ -177,6 +181,33 @@ class GeneticSearch(SearchMethod):
         units = np.concatenate([np.asarray(state.best)[None], np.asarray(state.population)])
         values = np.concatenate([np.asarray(state.best_fitness)[None], np.asarray(state.fitness)])
         return units, values
+
+
+@register
+@dataclasses.dataclass(frozen=True)
+class CMASearch(GeneticSearch):
+    """CMA-ES (`gearjax.optimize.cma`): a generation per step, its `config.population`
+    candidates in one call; `generations` steps. Its candidates for certification are the
+    best design found and the last generation."""
+
+    config: CMAConfig = dataclasses.field(default_factory=CMAConfig)
+    generations: int = 120
+
+    name: ClassVar[str] = "cma_es"
+    program: ClassVar[str] = "CMA-ES's batch program"
+
+    @classmethod
+    def from_settings(cls, settings) -> CMASearch:
+        return cls(settings.cma_config(), settings.generations or 120)
+
+    def init(self, key, starts, dtype):
+        return _in_dtype(cma_init(key, self.config, 6, starts), dtype)
+
+    def step(self, objective, space, state):
+        unit, state = _cma_ask(state, self.config)
+        designs = space.to_design(unit)
+        values = batch_objective(objective, designs)
+        return _cma_tell(state, unit, values, self.config), designs, values
 
 
 class _MultiStart(SearchMethod):

@@ -3,7 +3,7 @@
 Every key is optional (defaults in brackets); units are those of the scene file:
 
     [optimize]
-    method = "gradient"           # a registered method: "gradient" | "ga" | "switch" ["gradient"]
+    method = "gradient"           # a registered method: "gradient" | "ga" | "cma_es" | "switch" ["gradient"]
     objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) | "lte" (loaded
                                   #   TE peak-to-peak, um) | "pressure" (MPa) | "stiffness"
                                   #   (mean mesh stiffness, N/(mm um), maximised) ["force"]
@@ -22,8 +22,8 @@ Every key is optional (defaults in brackets); units are those of the scene file:
     certify = "reference"         # preset at which the best designs are evaluated again
                                   #   and the best is chosen, or "none" ["reference"]
     certify_top = 5               # candidates certified besides the best found [5]
-    population = 40               # GA [40]
-    generations = 30              # GA [30]
+    population = 40               # GA [40], CMA-ES [10]
+    generations = 30              # GA [30], CMA-ES [120]
     starts = 10                   # gradient [10], switch: start slots [6]
     iterations = 100              # gradient [100], switch: SQP iterations [30], --pareto [40]
     learning_rate = 0.05          # gradient, unit-cube coordinates [0.05]
@@ -51,6 +51,7 @@ from ..accuracy import PRESETS, Accuracy
 from ..io.declared_keys import INF, SceneKey, check_keys
 from ..scene import Scene
 from .certification import scene_with_accuracy
+from .cma import CMAConfig
 from .ga import GAConfig
 from .gradient import GradientConfig
 from .switch import SwitchConfig
@@ -111,8 +112,8 @@ class OptimizeSettings:
     accuracy: str | None = None  # None: the scene's own
     certify: str | None = "reference"  # None: no certification
     certify_top: int = 5
-    population: int = 40
-    generations: int = 30
+    population: int | None = None  # None: the method's own default
+    generations: int | None = None
     starts: int | None = None  # None: the method's own default
     iterations: int | None = None
     learning_rate: float = 0.05
@@ -227,7 +228,14 @@ class OptimizeSettings:
         return METHODS[self.method].from_settings(self)
 
     def ga_config(self) -> GAConfig:
-        return GAConfig(population=self.population, elite=max(1, min(2, self.population - 1)))
+        population = self.population or 40
+        return GAConfig(population=population, elite=max(1, min(2, population - 1)))
+
+    def cma_config(self) -> CMAConfig:
+        population = self.population or 10
+        if population < 4:
+            raise _fail("population", f"CMA-ES needs >= 4 candidates per generation; got {population}")
+        return CMAConfig(population=population)
 
     def gradient_config(self) -> GradientConfig:
         starts, iterations = self.starts or 10, self.iterations or 100
@@ -278,8 +286,10 @@ def scene_keys() -> tuple[SceneKey, ...]:
         SceneKey("certify", "", d["certify"], "preset at which the best candidates are evaluated again "
                  "(`none`: no certification)", choices=tuple(PRESETS) + ("none",)),
         count("certify_top", 1, "candidates certified"),
-        count("population", 2, "GA population"),
-        count("generations", 1, "GA generations"),
+        SceneKey("population", "", None, "GA, CMA-ES: candidates per generation (CMA-ES: >= 4)", (2, INF, True, True),
+                 absent="GA 40, CMA-ES 10", integer=True),
+        SceneKey("generations", "", None, "GA, CMA-ES: generations", (1, INF, True, True),
+                 absent="GA 30, CMA-ES 120", integer=True),
         SceneKey("starts", "", None, "gradient, switch: Latin-hypercube starts (start slots)", (1, INF, True, True),
                  absent="gradient 10, switch 6", integer=True),
         SceneKey("iterations", "", None, "gradient: Adam iterations per start; switch, --pareto: SQP iterations",
