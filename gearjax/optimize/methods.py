@@ -168,11 +168,19 @@ class GeneticSearch(SearchMethod):
     def init(self, key, starts, dtype):
         return _in_dtype(ga_init(key, self.config, 6, starts), dtype)
 
+    def ask(self, state):
+        """The generation's candidates in the unit cube, and the state that drew them."""
+        return _ga_ask(state, self.config)
+
+    def tell(self, state, unit, values):
+        """The state updated with the candidates' objective values."""
+        return _ga_tell(state, unit, values, self.config)
+
     def step(self, objective, space, state):
-        unit, state = _ga_ask(state, self.config)
+        unit, state = self.ask(state)
         designs = space.to_design(unit)
         values = batch_objective(objective, designs)
-        return _ga_tell(state, unit, values, self.config), designs, values
+        return self.tell(state, unit, values), designs, values
 
     def best(self, state):
         return state.best_fitness, state.best
@@ -203,11 +211,11 @@ class CMASearch(GeneticSearch):
     def init(self, key, starts, dtype):
         return _in_dtype(cma_init(key, self.config, 6, starts), dtype)
 
-    def step(self, objective, space, state):
-        unit, state = _cma_ask(state, self.config)
-        designs = space.to_design(unit)
-        values = batch_objective(objective, designs)
-        return _cma_tell(state, unit, values, self.config), designs, values
+    def ask(self, state):
+        return _cma_ask(state, self.config)
+
+    def tell(self, state, unit, values):
+        return _cma_tell(state, unit, values, self.config)
 
 
 class _MultiStart(SearchMethod):
