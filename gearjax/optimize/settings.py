@@ -3,7 +3,7 @@
 Every key is optional (defaults in brackets); units are those of the scene file:
 
     [optimize]
-    method = "gradient"           # a registered method: "gradient" | "ga" | "cma_es" | "switch" ["gradient"]
+    method = "cma_es"             # a registered method: "cma_es" | "gradient" | "ga" | "switch" ["cma_es"]
     objective = "force"           # "force" (F_s, N) | "velocity" (|v_n|, mm/s) | "lte" (loaded
                                   #   TE peak-to-peak, um) | "pressure" (MPa) | "stiffness"
                                   #   (mean mesh stiffness, N/(mm um), maximised) ["force"]
@@ -96,7 +96,7 @@ def _choice(key: str, value: Any, choices: tuple) -> str:
 class OptimizeSettings:
     """The parsed `[optimize]` section (scene-file units)."""
 
-    method: str = "gradient"
+    method: str = "cma_es"
     objective: str = "force"
     loads_Nm: tuple[float, ...] | None = None
     speeds_rpm: tuple[float, ...] | None = None
